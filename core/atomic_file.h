@@ -1,0 +1,31 @@
+// kdmesh — atomic outputs: write to a temporary file beside the target, then rename.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <string>
+
+namespace kdmesh {
+
+/// Usage:
+///   AtomicFile out(path);           // picks "<path>.tmp-<pid>-<n>" in the same directory
+///   write_everything(out.temp_path());
+///   out.commit();                   // rename(temp, path); throws OutputError on failure
+/// If commit() is never reached (exception, early return) the destructor removes the
+/// temporary file, so a failure never leaves a half-written or stale output behind.
+class AtomicFile {
+ public:
+  explicit AtomicFile(std::string path);
+  ~AtomicFile();
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  const std::string& path() const { return path_; }
+  const std::string& temp_path() const { return temp_; }
+  void commit();
+
+ private:
+  std::string path_;
+  std::string temp_;
+  bool committed_ = false;
+};
+
+}  // namespace kdmesh

@@ -1,0 +1,72 @@
+// kdmesh — typed errors. Library code throws these; executables map them to exit codes.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace kdmesh {
+
+/// Process exit codes, one per class of error (documented in the README).
+enum class ExitCode : int {
+  ok = 0,
+  failure = 1,      ///< unexpected internal error
+  usage = 2,        ///< bad command line
+  input = 3,        ///< unreadable or malformed input file
+  geometry = 4,     ///< input that has no valid result (e.g. all points coplanar)
+  check = 5,        ///< a --check verification found a mismatch
+  output = 6,       ///< an output file could not be written
+};
+
+class Error : public std::runtime_error {
+ public:
+  explicit Error(const std::string& what, ExitCode code = ExitCode::failure)
+      : std::runtime_error(what), code_(code) {}
+  ExitCode code() const { return code_; }
+
+ private:
+  ExitCode code_;
+};
+
+/// A malformed or unreadable input file. `line` is 1-based, 0 when not applicable.
+class InputError : public Error {
+ public:
+  InputError(const std::string& file, std::uint64_t line, const std::string& msg)
+      : Error(file + (line ? ":" + std::to_string(line) : std::string()) + ": " + msg,
+              ExitCode::input),
+        file_(file),
+        line_(line) {}
+  const std::string& file() const { return file_; }
+  std::uint64_t line() const { return line_; }
+
+ private:
+  std::string file_;
+  std::uint64_t line_;
+};
+
+/// Input that is readable but admits no result (empty, all coplanar, ...).
+class GeometryError : public Error {
+ public:
+  explicit GeometryError(const std::string& msg) : Error(msg, ExitCode::geometry) {}
+};
+
+/// A verification (validity check, TetGen/CGAL comparison) failed.
+class CheckError : public Error {
+ public:
+  explicit CheckError(const std::string& msg) : Error(msg, ExitCode::check) {}
+};
+
+/// An output file could not be written.
+class OutputError : public Error {
+ public:
+  OutputError(const std::string& file, const std::string& msg)
+      : Error(file + ": " + msg, ExitCode::output) {}
+};
+
+/// A bad option value passed to a library function or command.
+class UsageError : public Error {
+ public:
+  explicit UsageError(const std::string& msg) : Error(msg, ExitCode::usage) {}
+};
+
+}  // namespace kdmesh

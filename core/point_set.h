@@ -1,0 +1,25 @@
+// kdmesh — plain point data shared by every pipeline stage.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace kdmesh {
+
+/// A set of points in R^3, stored flat: xyz[3*i + 0..2] are the coordinates of point i.
+/// Point ids are uint32_t indices into this array; every stage refers to points by id.
+struct PointSet {
+  std::vector<double> xyz;  ///< 3*n doubles
+
+  std::size_t size() const { return xyz.size() / 3; }
+  bool empty() const { return xyz.empty(); }
+  const double* p(std::uint32_t i) const { return xyz.data() + 3 * std::size_t(i); }
+  void push_back(double x, double y, double z) {
+    xyz.push_back(x);
+    xyz.push_back(y);
+    xyz.push_back(z);
+  }
+};
+
+}  // namespace kdmesh

@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# kdmesh setup: install Debian 12 dependencies (if missing), build, then run a goal.
+#
+#   bash tools/setup.sh demo    install + build + mesh a shipped sample (README command 1)
+#   bash tools/setup.sh test    install + build + run the whole test suite (README command 2)
+#   bash tools/setup.sh build   install + build only
+#   bash tools/setup.sh deps    install only
+#
+# Environment: BUILD_DIR (default: build), BUILD_TYPE (default: Release), JOBS (default: nproc).
+set -euo pipefail
+
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$here"
+goal="${1:-build}"
+BUILD_DIR="${BUILD_DIR:-build}"
+BUILD_TYPE="${BUILD_TYPE:-Release}"
+JOBS="${JOBS:-$(nproc)}"
+
+# One package per line; keep sorted. Everything the build, the tests and the tools need.
+PACKAGES=(
+  build-essential
+  cmake
+  libbenchmark-dev
+  libcgal-dev
+  libcli11-dev
+  libeigen3-dev
+  libfmt-dev
+  libgmp-dev
+  libgtest-dev
+  libopenmesh-dev
+  libtbb-dev
+  libtet1.5-dev
+  libvtk9-dev
+  libyaml-cpp-dev
+  nlohmann-json3-dev
+  tetgen
+  time
+)
+
+install_deps() {
+  local missing=()
+  for p in "${PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  if [ ${#missing[@]} -eq 0 ]; then
+    echo "setup: all ${#PACKAGES[@]} Debian packages present"
+    return
+  fi
+  echo "setup: installing ${#missing[@]} missing package(s): ${missing[*]}"
+  local sudo=()
+  [ "$(id -u)" -eq 0 ] || sudo=(sudo)
+  export DEBIAN_FRONTEND=noninteractive
+  "${sudo[@]}" apt-get update -qq
+  "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+}
+
+build() {
+  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="$BUILD_TYPE"
+  cmake --build "$BUILD_DIR" -j "$JOBS"
+}
+
+case "$goal" in
+  deps)  install_deps ;;
+  build) install_deps; build ;;
+  test)
+    install_deps; build
+    ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS"
+    ;;
+  demo)
+    install_deps; build
+    mkdir -p out
+    "$BUILD_DIR/kdmesh" points --dist cube -n 200000 --seed 1 -o out/cube-200k.xyz
+    "$BUILD_DIR/kdmesh" delaunay out/cube-200k.xyz --order kd-bfs --check -o out/cube-200k.vtu
+    echo "setup: wrote out/cube-200k.vtu"
+    ;;
+  *) echo "usage: bash tools/setup.sh {demo|test|build|deps}" >&2; exit 2 ;;
+esac
