@@ -19,9 +19,9 @@ inline constexpr std::uint32_t kInfiniteVertex = std::numeric_limits<std::uint32
 /// Tet t has vertices v[4t+0..3] (point ids, or kInfiniteVertex) and neighbours adj[4t+0..3].
 ///  - Face i of tet t is the face opposite v[4t+i].
 ///  - adj[4t+i] = 4*u + j means: face i of t is face j of tet u.
-///  - Finite tets are positively oriented: orient3d(v0, v1, v2, v3) > 0, with
-///    orient3d(a,b,c,d) > 0 when d lies on the side of plane abc where (b-a)x(c-a) points... see
-///    mesher/predicates.h for the exact sign convention.
+///  - Finite tets are positively oriented: det[v1-v0, v2-v0, v3-v0] > 0, i.e. v3 lies on the
+///    side of plane (v0,v1,v2) that (v1-v0)x(v2-v0) points to; (0, e1, e2, e3) is positive.
+///    This is VTK_TETRA's convention and kdmesh's everywhere (mesher/predicates.h: orient3d).
 ///  - An infinite tet has exactly one infinite vertex; replacing it by a point far outside the
 ///    hull across its finite face gives a positively oriented tet.
 /// Every tet in the arrays is alive (no holes).
@@ -44,7 +44,7 @@ struct DataArray {
 };
 
 /// A finite tetrahedral mesh: what writers consume and what comparisons use.
-/// tets[4t+0..3] are point ids, every tet positively oriented.
+/// tets[4t+0..3] are point ids, every tet positively oriented (see Triangulation).
 struct TetMesh {
   PointSet points;
   std::vector<std::uint32_t> tets;

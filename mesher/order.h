@@ -1,0 +1,37 @@
+// kdmesh — insertion orders (pipeline stage: PointSet -> Ordering).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/ordering.h"
+#include "core/point_set.h"
+
+namespace kdmesh {
+
+enum class OrderKind {
+  kd_bfs,      ///< paper: kd-tree, cut-longest-edge rule, breadth-first; hint = kd parent
+  kd_bfs_alt,  ///< same tree with the alternating x/y/z split rule (paper's ablation)
+  hilbert,     ///< Hilbert curve order; hint = previous point
+  brio,        ///< BRIO rounds of ratio 1/8, each Hilbert-sorted; hint = previous point
+  random,      ///< seeded uniform shuffle; hint = previous point
+  input,       ///< identity; hint = previous point
+};
+
+struct OrderOptions {
+  OrderKind kind = OrderKind::kd_bfs;
+  std::uint64_t seed = 1;      ///< for random and brio
+  double brio_ratio = 0.125;   ///< fraction of points in each round relative to the next
+};
+
+/// Builds the insertion order of `points`. Deterministic for given points and options.
+Ordering make_order(const PointSet& points, const OrderOptions& options);
+
+/// "kd-bfs", "kd-bfs-alt", "hilbert", "brio", "random", "input". Throws UsageError otherwise.
+OrderKind parse_order_kind(std::string_view name);
+std::string_view order_kind_name(OrderKind kind);
+std::vector<std::string> order_kind_names();
+
+}  // namespace kdmesh
