@@ -1,0 +1,47 @@
+// kdmesh — incremental Bowyer–Watson Delaunay tetrahedralization
+// (pipeline stage: PointSet + Ordering -> Triangulation).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "core/ordering.h"
+#include "core/point_set.h"
+#include "core/tet_mesh.h"
+
+namespace kdmesh {
+
+struct DelaunayOptions {
+  /// Called now and then with the fraction of points inserted (0..1]; may be empty.
+  std::function<void(double)> progress;
+};
+
+struct DelaunayStats {
+  std::uint64_t inserted = 0;       ///< points in the triangulation
+  std::uint64_t orient_tests = 0;   ///< orientation tests during point location (paper's count)
+  std::uint64_t conflicts = 0;      ///< conflicting tets summed over all insertions (paper's count)
+  std::uint64_t exact_fallbacks = 0;  ///< predicate calls the float filter could not decide
+  std::vector<std::uint32_t> duplicates;    ///< ids of points skipped as exact duplicates ...
+  std::vector<std::uint32_t> duplicate_of;  ///< ... and the id of the vertex each one repeats
+  double seconds = 0;               ///< wall time of the whole insertion
+};
+
+struct DelaunayResult {
+  Triangulation tri;  ///< the full triangulation (infinite tets included), original point ids
+  DelaunayStats stats;
+};
+
+/// Delaunay tetrahedralization of `points`, inserting them in `order` and locating each from
+/// its hint. Exact predicates with symbolic perturbation: the result is a Delaunay
+/// tetrahedralization of the points; cospherical ties are broken consistently (independent of
+/// the order), so every order yields the same tets.
+/// Throws GeometryError for empty input or input with no 4 non-coplanar points,
+/// UsageError if `order` is not a permutation of the points or has too many points.
+DelaunayResult delaunay(const PointSet& points, const Ordering& order,
+                        const DelaunayOptions& options = {});
+
+/// The finite tets of `tri`, 4 point ids each, positively oriented.
+std::vector<std::uint32_t> finite_tets(const Triangulation& tri);
+
+}  // namespace kdmesh
