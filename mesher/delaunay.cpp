@@ -1,0 +1,426 @@
+// kdmesh — incremental Bowyer–Watson Delaunay kernel.
+//
+// Storage: flat arrays, 4 vertex ids (V) and 4 adjacency entries (A) per tet; A[4t+i] = 4u+j
+// means face i of t (opposite V[4t+i]) is face j of u. An infinite vertex closes the hull,
+// so every face has a neighbour and the triangulation is a closed 3-sphere.
+// Insertion: stochastic visibility walk from the hint's tet; cavity grown breadth-first with
+// the perturbed insphere test; the star of the new point is built over the cavity boundary;
+// cavity slots are recycled (then a free list, then the end of the arrays), so the steady
+// state allocates nothing.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/delaunay.h"
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <string>
+
+#include "core/error.h"
+#include "core/rng.h"
+#include "core/timer.h"
+#include "mesher/conflict.h"
+#include "mesher/predicates.h"
+
+namespace kdmesh {
+
+namespace {
+
+constexpr std::uint32_t kInf = kInfiniteVertex;
+constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+constexpr std::uint32_t kAliasBit = 0x80000000u;  // v2t entry of a duplicate: alias | vertex id
+constexpr std::uint32_t kDead = 0xFFFFFFFEu;      // V[4t] of a tet on the free list
+constexpr std::size_t kMaxPoints = std::size_t(1) << 28;  // keeps tet ids below 2^31
+
+enum : std::uint8_t { kUnvisited = 0, kInCavity = 1, kOutside = 2 };
+
+/// Open-addressing map from an undirected edge to the new-tet face that holds it, reused
+/// across insertions (only the used slots are cleared).
+class EdgeMap {
+ public:
+  void reset(std::size_t expected_edges) {
+    for (std::uint32_t s : used_) keys_[s] = kEmpty;
+    used_.clear();
+    std::size_t cap = 64;
+    while (cap < 2 * expected_edges) cap <<= 1;
+    if (cap > keys_.size()) {
+      keys_.assign(cap, kEmpty);
+      vals_.resize(cap);
+    }
+    mask_ = keys_.size() - 1;
+  }
+  /// Returns the stored face for edge (a,b) and erases it, or records `face` and returns kNone.
+  std::uint32_t match(std::uint32_t a, std::uint32_t b, std::uint32_t face) {
+    if (a > b) std::swap(a, b);
+    const std::uint64_t key = (std::uint64_t(a) << 32) | b;
+    std::size_t s = (key * 0x9E3779B97F4A7C15ULL) >> 40 & mask_;
+    while (keys_[s] != kEmpty) {
+      if (keys_[s] == key) {
+        keys_[s] = kTomb;
+        return vals_[s];
+      }
+      s = (s + 1) & mask_;
+    }
+    keys_[s] = key;
+    vals_[s] = face;
+    used_.push_back(std::uint32_t(s));
+    return kNone;
+  }
+
+ private:
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
+  static constexpr std::uint64_t kTomb = ~std::uint64_t(0) - 1;
+  std::vector<std::uint64_t> keys_;
+  std::vector<std::uint32_t> vals_;
+  std::vector<std::uint32_t> used_;
+  std::size_t mask_ = 0;
+};
+
+struct BoundaryFace {
+  std::array<std::uint32_t, 4> v;  // vertices of the cavity tet, the face's opposite slot := p
+  std::uint32_t slot;              // the slot that now holds p
+  std::uint32_t outer;             // 4*u+j of the tet outside the cavity across this face
+};
+
+class Kernel {
+ public:
+  Kernel(const PointSet& points, DelaunayStats& stats)
+      : xyz_(points.xyz.data()), n_(points.size()), stats_(stats), rng_(0x6b646d657368ULL) {
+    v2t_.assign(n_, kNone);
+    const std::size_t expect = n_ * 7 + 64;
+    V_.reserve(4 * expect);
+    A_.reserve(4 * expect);
+    state_.reserve(expect);
+  }
+
+  const double* P(std::uint32_t v) const { return xyz_ + 3 * std::size_t(v); }
+
+  /// Creates the first tet from 4 non-coplanar points and closes it with 4 infinite tets.
+  void init(std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
+    if (pred::orient3d(P(a), P(b), P(c), P(d)) < 0) std::swap(a, b);
+    const std::array<std::uint32_t, 4> t0 = {a, b, c, d};
+    new_tet(t0);
+    for (int i = 0; i < 4; ++i) {
+      std::array<std::uint32_t, 4> t = t0;
+      t[i] = kInf;
+      std::swap(t[(i + 1) % 4], t[(i + 2) % 4]);  // put the infinite vertex outside face i
+      new_tet(t);
+    }
+    // Link the 5 tets by matching faces (3 vertex ids each).
+    for (std::uint32_t t = 0; t < 5; ++t)
+      for (std::uint32_t f = 0; f < 4; ++f)
+        for (std::uint32_t u = 0; u < 5; ++u)
+          for (std::uint32_t g = 0; g < 4; ++g)
+            if (u != t && same_face(t, f, u, g)) A_[4 * t + f] = 4 * u + g;
+    for (std::uint32_t t = 0; t < 5; ++t)
+      for (int i = 0; i < 4; ++i)
+        if (V_[4 * t + i] != kInf) v2t_[V_[4 * t + i]] = t;
+    last_ = 0;
+    stats_.inserted = 4;
+  }
+
+  /// Inserts point `pid`, starting the search at the tet of `hint` (a point id).
+  void insert(std::uint32_t pid, std::uint32_t hint) {
+    const double* p = P(pid);
+    std::uint32_t start = last_;
+    if (hint != kNone && hint < n_) {
+      std::uint32_t h = v2t_[hint];
+      if (h != kNone && (h & kAliasBit)) h = v2t_[h & ~kAliasBit];
+      if (h != kNone) start = h;
+    }
+    const std::uint32_t base = locate(p, start);
+    if (!is_infinite(base)) {
+      for (int i = 0; i < 4; ++i) {
+        const std::uint32_t w = V_[4 * base + i];
+        const double* q = P(w);
+        if (q[0] == p[0] && q[1] == p[1] && q[2] == p[2]) {
+          stats_.duplicates.push_back(pid);
+          stats_.duplicate_of.push_back(w);
+          v2t_[pid] = kAliasBit | w;
+          return;
+        }
+      }
+    }
+    grow_cavity(base, p);
+    fill_cavity(pid);
+    ++stats_.inserted;
+  }
+
+  /// Moves the (compacted) arrays out.
+  Triangulation release() {
+    compact();
+    Triangulation tri;
+    tri.v = std::move(V_);
+    tri.adj = std::move(A_);
+    return tri;
+  }
+
+ private:
+  bool is_infinite(std::uint32_t t) const {
+    const std::uint32_t* v = &V_[4 * std::size_t(t)];
+    return v[0] == kInf || v[1] == kInf || v[2] == kInf || v[3] == kInf;
+  }
+
+  bool same_face(std::uint32_t t, std::uint32_t f, std::uint32_t u, std::uint32_t g) const {
+    std::array<std::uint32_t, 3> x{}, y{};
+    for (int i = 0, k = 0; i < 4; ++i)
+      if (i != int(f)) x[k++] = V_[4 * t + i];
+    for (int i = 0, k = 0; i < 4; ++i)
+      if (i != int(g)) y[k++] = V_[4 * u + i];
+    std::sort(x.begin(), x.end());
+    std::sort(y.begin(), y.end());
+    return x == y;
+  }
+
+  std::uint32_t new_tet(const std::array<std::uint32_t, 4>& v) {
+    std::uint32_t t;
+    if (!free_.empty()) {
+      t = free_.back();
+      free_.pop_back();
+      std::copy(v.begin(), v.end(), V_.begin() + 4 * std::size_t(t));
+    } else {
+      t = std::uint32_t(V_.size() / 4);
+      V_.insert(V_.end(), v.begin(), v.end());
+      A_.insert(A_.end(), 4, kNone);
+      state_.push_back(kUnvisited);
+    }
+    return t;
+  }
+
+  /// Visibility walk: from `t`, cross any face that separates t from p, until p is in the
+  /// closed tet (finite result) or beyond a hull face (infinite result, in conflict with p).
+  std::uint32_t locate(const double* p, std::uint32_t t) {
+    if (is_infinite(t)) {
+      int i = 0;
+      while (V_[4 * t + i] != kInf) ++i;
+      t = A_[4 * t + i] >> 2;  // the finite tet behind the hull face
+    }
+    std::uint32_t prev = kNone;
+    const std::size_t limit = 16 + 4 * (V_.size() / 4);
+    for (std::size_t steps = 0; steps < limit; ++steps) {
+      const std::uint32_t r = std::uint32_t(rng_.next() >> 62);
+      const std::uint32_t* v = &V_[4 * std::size_t(t)];
+      std::uint32_t next = kNone;
+      for (std::uint32_t j = 0; j < 4; ++j) {
+        const std::uint32_t f = (j + r) & 3;
+        const std::uint32_t n = A_[4 * t + f] >> 2;
+        if (n == prev) continue;  // p is on t's side of that face (tested from the other side)
+        const double* q[4] = {P(v[0]), P(v[1]), P(v[2]), P(v[3])};
+        q[f] = p;
+        ++stats_.orient_tests;
+        if (pred::orient3d(q[0], q[1], q[2], q[3]) < 0) {
+          next = n;
+          break;
+        }
+      }
+      if (next == kNone) return t;
+      prev = t;
+      t = next;
+      if (is_infinite(t)) return t;
+    }
+    throw Error("delaunay: point location did not terminate (internal error)");
+  }
+
+  bool in_conflict(std::uint32_t t, const double* p) const {
+    return tet_in_conflict(xyz_, V_.data(), A_.data(), t, p);
+  }
+
+  void grow_cavity(std::uint32_t base, const double* p) {
+    cavity_.clear();
+    touched_.clear();
+    cavity_.push_back(base);
+    state_[base] = kInCavity;
+    for (std::size_t i = 0; i < cavity_.size(); ++i) {
+      const std::uint32_t c = cavity_[i];
+      for (int f = 0; f < 4; ++f) {
+        const std::uint32_t n = A_[4 * c + f] >> 2;
+        if (state_[n] != kUnvisited) continue;
+        if (in_conflict(n, p)) {
+          state_[n] = kInCavity;
+          cavity_.push_back(n);
+        } else {
+          state_[n] = kOutside;
+          touched_.push_back(n);
+        }
+      }
+    }
+    stats_.conflicts += cavity_.size();
+  }
+
+  void fill_cavity(std::uint32_t pid) {
+    // 1. Record the boundary faces before any cavity slot is overwritten.
+    boundary_.clear();
+    for (std::uint32_t c : cavity_)
+      for (std::uint32_t f = 0; f < 4; ++f) {
+        const std::uint32_t outer = A_[4 * c + f];
+        if (state_[outer >> 2] == kInCavity) continue;
+        BoundaryFace b;
+        std::memcpy(b.v.data(), &V_[4 * std::size_t(c)], sizeof(b.v));
+        b.v[f] = pid;
+        b.slot = f;
+        b.outer = outer;
+        boundary_.push_back(b);
+      }
+    for (std::uint32_t t : touched_) state_[t] = kUnvisited;
+    // 2. Dead cavity tets become free slots; new tets take them first.
+    for (std::uint32_t c : cavity_) {
+      state_[c] = kUnvisited;
+      V_[4 * std::size_t(c)] = kDead;
+      free_.push_back(c);
+    }
+    edges_.reset(boundary_.size() * 3 / 2 + 1);
+    std::uint32_t t = kNone;
+    for (const BoundaryFace& b : boundary_) {
+      t = new_tet(b.v);
+      A_[4 * t + b.slot] = b.outer;
+      A_[b.outer] = 4 * t + b.slot;
+      // The other 3 faces contain p and one edge of the boundary face: pair them by edge.
+      for (std::uint32_t j = 0; j < 4; ++j) {
+        if (j == b.slot) continue;
+        std::uint32_t e[2], k = 0;
+        for (std::uint32_t i = 0; i < 4; ++i)
+          if (i != j && i != b.slot) e[k++] = b.v[i];
+        const std::uint32_t other = edges_.match(e[0], e[1], 4 * t + j);
+        if (other != kNone) {
+          A_[4 * t + j] = other;
+          A_[other] = 4 * t + j;
+        }
+      }
+      for (std::uint32_t i = 0; i < 4; ++i)
+        if (b.v[i] != kInf) v2t_[b.v[i]] = t;
+    }
+    last_ = t;
+  }
+
+  /// Removes free-list holes so that every tet in the arrays is alive.
+  void compact() {
+    if (free_.empty()) return;
+    const std::size_t m = V_.size() / 4;
+    std::vector<std::uint32_t> remap(m, kNone);
+    std::uint32_t next = 0;
+    for (std::size_t t = 0; t < m; ++t)
+      if (V_[4 * t] != kDead) remap[t] = next++;
+    for (std::size_t t = 0; t < m; ++t) {
+      if (remap[t] == kNone) continue;
+      const std::size_t d = 4 * std::size_t(remap[t]);
+      for (int i = 0; i < 4; ++i) {
+        V_[d + i] = V_[4 * t + i];
+        const std::uint32_t a = A_[4 * t + i];
+        A_[d + i] = 4 * remap[a >> 2] + (a & 3);
+      }
+    }
+    V_.resize(4 * std::size_t(next));
+    A_.resize(4 * std::size_t(next));
+    free_.clear();
+  }
+
+  const double* xyz_;
+  std::size_t n_;
+  DelaunayStats& stats_;
+  Rng rng_;
+  std::vector<std::uint32_t> V_, A_;
+  std::vector<std::uint8_t> state_;
+  std::vector<std::uint32_t> v2t_;
+  std::vector<std::uint32_t> free_;
+  std::vector<std::uint32_t> cavity_, touched_;
+  std::vector<BoundaryFace> boundary_;
+  EdgeMap edges_;
+  std::uint32_t last_ = 0;
+};
+
+void validate_order(const PointSet& points, const Ordering& order) {
+  const std::size_t n = points.size();
+  if (order.order.size() != n || order.hint.size() != n)
+    throw UsageError("delaunay: ordering has " + std::to_string(order.order.size()) +
+                     " entries (and " + std::to_string(order.hint.size()) + " hints) for " +
+                     std::to_string(n) + " points");
+  std::vector<bool> seen(n, false);
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint32_t id = order.order[k];
+    if (id >= n || seen[id])
+      throw UsageError("delaunay: ordering is not a permutation (rank " + std::to_string(k) +
+                       ", point " + std::to_string(id) + ")");
+    seen[id] = true;
+    if (order.hint[k] != kNoHint && order.hint[k] >= n)
+      throw UsageError("delaunay: hint of rank " + std::to_string(k) + " is not a point id");
+  }
+}
+
+bool same_point(const double* a, const double* b) {
+  return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
+}
+
+}  // namespace
+
+DelaunayResult delaunay(const PointSet& points, const Ordering& order,
+                        const DelaunayOptions& options) {
+  Stopwatch clock;
+  const std::size_t n = points.size();
+  if (n == 0) throw GeometryError("delaunay: the point set is empty");
+  if (n > kMaxPoints)
+    throw UsageError("delaunay: " + std::to_string(n) + " points exceed the kernel's limit of " +
+                     std::to_string(kMaxPoints));
+  validate_order(points, order);
+  const std::uint64_t exact0 = pred::exact_calls();
+
+  DelaunayResult result;
+  DelaunayStats& st = result.stats;
+  auto P = [&](std::uint32_t id) { return points.p(id); };
+
+  // Find 4 affinely independent points in insertion order; points skipped on the way are
+  // inserted right after the first tet (they may be duplicates, collinear or coplanar).
+  std::vector<std::size_t> deferred;
+  const std::uint32_t a = order.order[0];
+  std::size_t k = 1;
+  for (; k < n && same_point(P(order.order[k]), P(a)); ++k) {
+    st.duplicates.push_back(order.order[k]);
+    st.duplicate_of.push_back(a);
+  }
+  if (k == n)
+    throw GeometryError("delaunay: all " + std::to_string(n) +
+                        " points are identical; no tetrahedralization exists");
+  const std::uint32_t b = order.order[k++];
+  for (; k < n && pred::collinear(P(a), P(b), P(order.order[k])); ++k) deferred.push_back(k);
+  if (k == n)
+    throw GeometryError("delaunay: all " + std::to_string(n) +
+                        " points are collinear; no tetrahedralization exists");
+  const std::uint32_t c = order.order[k++];
+  for (; k < n && pred::orient3d(P(a), P(b), P(c), P(order.order[k])) == 0; ++k)
+    deferred.push_back(k);
+  if (k == n)
+    throw GeometryError("delaunay: all " + std::to_string(n) +
+                        " points are coplanar; no tetrahedralization exists");
+  const std::uint32_t d = order.order[k++];
+
+  Kernel kernel(points, st);
+  kernel.init(a, b, c, d);
+  std::size_t done = 0;
+  auto report = [&] {
+    if (options.progress && (++done & 0xFFFF) == 0) options.progress(double(done) / double(n));
+  };
+  auto hint_of = [&](std::size_t rank) {
+    return order.hint[rank] == kNoHint ? kNone : order.hint[rank];
+  };
+  for (std::size_t r : deferred) {
+    kernel.insert(order.order[r], hint_of(r));
+    report();
+  }
+  for (; k < n; ++k) {
+    kernel.insert(order.order[k], hint_of(k));
+    report();
+  }
+  result.tri = kernel.release();
+  st.exact_fallbacks = pred::exact_calls() - exact0;
+  st.seconds = clock.seconds();
+  if (options.progress) options.progress(1.0);
+  return result;
+}
+
+std::vector<std::uint32_t> finite_tets(const Triangulation& tri) {
+  std::vector<std::uint32_t> out;
+  out.reserve(tri.v.size());
+  for (std::size_t t = 0; t < tri.num_tets(); ++t)
+    if (!tri.is_infinite(t)) out.insert(out.end(), tri.v.begin() + 4 * t, tri.v.begin() + 4 * t + 4);
+  return out;
+}
+
+}  // namespace kdmesh

@@ -1,0 +1,127 @@
+// kdmesh — exact validity check of a Delaunay triangulation.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/delaunay_check.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "mesher/conflict.h"
+#include "mesher/delaunay.h"
+#include "mesher/predicates.h"
+#include "mesher/reference_delaunay.h"
+#include "mesher/tet_compare.h"
+
+namespace kdmesh {
+
+namespace {
+
+std::string tet_str(const Triangulation& tri, std::size_t t) {
+  std::string s = "tet " + std::to_string(t) + " (";
+  for (int i = 0; i < 4; ++i) {
+    const std::uint32_t v = tri.v[4 * t + i];
+    s += (i ? " " : "") + (v == kInfiniteVertex ? std::string("inf") : std::to_string(v));
+  }
+  return s + ")";
+}
+
+std::array<std::uint32_t, 3> face_of(const Triangulation& tri, std::size_t t, int f) {
+  std::array<std::uint32_t, 3> x{};
+  for (int i = 0, k = 0; i < 4; ++i)
+    if (i != f) x[k++] = tri.v[4 * t + i];
+  std::sort(x.begin(), x.end());
+  return x;
+}
+
+}  // namespace
+
+ValidityReport check_delaunay(const PointSet& points, const Triangulation& tri,
+                              std::size_t max_problems) {
+  ValidityReport r;
+  auto problem = [&](std::string msg) {
+    if (r.problems.size() < max_problems) r.problems.push_back(std::move(msg));
+  };
+  const std::size_t m = tri.num_tets();
+  const std::size_t n = points.size();
+  if (tri.adj.size() != tri.v.size()) {
+    r.asymmetric_adjacencies = 1;
+    problem("vertex and adjacency arrays differ in length");
+    return r;
+  }
+
+  // 1. Structure: vertex ids, one infinite vertex at most, symmetric adjacency.
+  std::vector<bool> used(n, false);
+  bool structure_ok = true;
+  for (std::size_t t = 0; t < m; ++t) {
+    int inf = 0;
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t v = tri.v[4 * t + i];
+      if (v == kInfiniteVertex) ++inf;
+      else if (v >= n) {
+        structure_ok = false;
+        problem(tet_str(tri, t) + ": vertex id out of range");
+      } else used[v] = true;
+    }
+    if (inf > 1) {
+      structure_ok = false;
+      problem(tet_str(tri, t) + ": more than one infinite vertex");
+    }
+    for (int f = 0; f < 4; ++f) {
+      const std::uint32_t a = tri.adj[4 * t + f];
+      const std::size_t u = a >> 2;
+      if (u >= m || tri.adj[a] != 4 * t + f || face_of(tri, t, f) != face_of(tri, u, a & 3)) {
+        ++r.asymmetric_adjacencies;
+        problem(tet_str(tri, t) + " face " + std::to_string(f) +
+                ": neighbour does not point back through the same face");
+      }
+    }
+  }
+  if (!structure_ok) ++r.asymmetric_adjacencies;
+  if (r.asymmetric_adjacencies) return r;  // the geometric checks below need sound topology
+
+  // 2. Every point is a vertex, unless it repeats another point's coordinates.
+  const std::vector<std::uint32_t> canon = canonical_point_ids(points);
+  for (std::size_t i = 0; i < n; ++i)
+    if (!used[canon[i]]) {
+      ++r.asymmetric_adjacencies;
+      problem("point " + std::to_string(i) + " is not a vertex of the triangulation");
+    }
+
+  // 3. Orientation and local Delaunay property of every face (exact, perturbed).
+  for (std::size_t t = 0; t < m; ++t) {
+    const std::uint32_t* v = &tri.v[4 * t];
+    const bool infinite = tri.is_infinite(t);
+    if (infinite) {
+      for (int i = 0; i < 4; ++i) r.hull_faces += v[i] == kInfiniteVertex;
+    } else {
+      ++r.finite_tets;
+      if (pred::orient3d(points.p(v[0]), points.p(v[1]), points.p(v[2]), points.p(v[3])) <= 0) {
+        ++r.bad_orientation;
+        problem(tet_str(tri, t) + ": not positively oriented");
+      }
+    }
+    for (int f = 0; f < 4; ++f) {
+      const std::uint32_t q = tri.v[tri.adj[4 * t + f]];  // vertex opposite face f, in the neighbour
+      if (q == kInfiniteVertex) continue;                  // never in conflict with a finite tet
+      if (tet_in_conflict(points.xyz.data(), tri.v.data(), tri.adj.data(), std::uint32_t(t),
+                          points.p(q))) {
+        ++r.non_delaunay_faces;
+        problem(tet_str(tri, t) + " face " + std::to_string(f) + ": opposite vertex " +
+                std::to_string(q) + (infinite ? " breaks hull convexity" : " is inside its circumsphere"));
+      }
+    }
+  }
+
+  // 4. The tets cover the convex hull exactly once: compare volumes with an independent hull.
+  r.volume = total_volume(points, finite_tets(tri));
+  r.hull_volume = convex_hull_volume(points);
+  const double tol = 1e-9 * std::max(std::fabs(r.hull_volume), 1e-300);
+  r.volume_matches = std::fabs(r.volume - r.hull_volume) <= tol;
+  if (!r.volume_matches)
+    problem("total tet volume " + std::to_string(r.volume) + " differs from the convex hull's " +
+            std::to_string(r.hull_volume));
+  return r;
+}
+
+}  // namespace kdmesh
