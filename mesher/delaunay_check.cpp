@@ -34,6 +34,30 @@ std::array<std::uint32_t, 3> face_of(const Triangulation& tri, std::size_t t, in
   return x;
 }
 
+/// Is the face (t, f) with opposite vertex q decided by the perturbation alone (the
+/// unperturbed test is exactly 0)? For a hull face: q coplanar with it and on its circumcircle.
+bool is_tie(const PointSet& points, const Triangulation& tri, std::size_t t, int f, std::uint32_t q) {
+  const std::uint32_t* v = &tri.v[4 * t];
+  int inf = -1;
+  for (int i = 0; i < 4; ++i)
+    if (v[i] == kInfiniteVertex) inf = i;
+  if (inf < 0)
+    return pred::insphere(points.p(v[0]), points.p(v[1]), points.p(v[2]), points.p(v[3]),
+                          points.p(q)) == 0;
+  (void)f;
+  const double* p[4];
+  for (int i = 0; i < 4; ++i) p[i] = i == inf ? points.p(q) : points.p(v[i]);
+  if (pred::orient3d(p[0], p[1], p[2], p[3]) != 0) return false;
+  // Coplanar: a tie only if q is on the circumcircle of the hull face. The sphere through the
+  // face and the apex behind it meets the plane in that circle.
+  const double* apex = points.p(tri.v[tri.adj[4 * t + inf]]);
+  const double* a[3];
+  for (int i = 0, k = 0; i < 4; ++i)
+    if (i != inf) a[k++] = points.p(v[i]);
+  if (pred::orient3d(a[0], a[1], a[2], apex) < 0) std::swap(a[0], a[1]);
+  return pred::insphere(a[0], a[1], a[2], apex, points.p(q)) == 0;
+}
+
 }  // namespace
 
 ValidityReport check_delaunay(const PointSet& points, const Triangulation& tri,
@@ -104,6 +128,7 @@ ValidityReport check_delaunay(const PointSet& points, const Triangulation& tri,
     for (int f = 0; f < 4; ++f) {
       const std::uint32_t q = tri.v[tri.adj[4 * t + f]];  // vertex opposite face f, in the neighbour
       if (q == kInfiniteVertex) continue;                  // never in conflict with a finite tet
+      if (tri.adj[4 * t + f] >> 2 > t && is_tie(points, tri, t, f, q)) ++r.tie_faces;
       if (tet_in_conflict(points.xyz.data(), tri.v.data(), tri.adj.data(), std::uint32_t(t),
                           points.p(q))) {
         ++r.non_delaunay_faces;

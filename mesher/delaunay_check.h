@@ -16,6 +16,10 @@ struct ValidityReport {
   std::size_t asymmetric_adjacencies = 0;  ///< adj[adj[f]] != f or the shared face differs
   std::size_t bad_orientation = 0;         ///< finite tets with orient3d <= 0
   std::size_t non_delaunay_faces = 0;      ///< faces whose opposite vertex is in conflict (exact)
+  /// Faces decided only by the symbolic perturbation: the opposite vertex lies exactly on the
+  /// circumsphere (or in the plane and on the circumcircle of a hull face). When this is 0,
+  /// the Delaunay tetrahedralization is unique and every correct kernel must return it.
+  std::size_t tie_faces = 0;
   double volume = 0;       ///< sum of finite tet volumes
   double hull_volume = 0;  ///< convex hull volume from an independent computation (CGAL)
   bool volume_matches = false;

@@ -1,0 +1,231 @@
+// The Delaunay kernel: exact validity on every distribution and on degenerate inputs,
+// agreement with TetGen and CGAL, order independence, determinism, and errors.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+
+#include "core/error.h"
+#include "core/rng.h"
+#include "mesher/delaunay.h"
+#include "mesher/delaunay_check.h"
+#include "mesher/order.h"
+#include "mesher/reference_delaunay.h"
+#include "mesher/tet_compare.h"
+#include "tools/lib/distributions.h"
+
+namespace kdmesh {
+namespace {
+
+DelaunayResult run(const PointSet& pts, OrderKind kind = OrderKind::kd_bfs) {
+  return delaunay(pts, make_order(pts, {kind, 1, 0.125}));
+}
+
+void expect_valid(const PointSet& pts, const DelaunayResult& r, const std::string& what) {
+  const ValidityReport rep = check_delaunay(pts, r.tri);
+  std::string msg;
+  for (const auto& p : rep.problems) msg += "\n  " + p;
+  EXPECT_TRUE(rep.ok()) << what << ": " << msg << "\n  volume " << rep.volume << " hull "
+                        << rep.hull_volume;
+}
+
+/// Finite tets in canonical ids (duplicates mapped to their first copy).
+std::vector<std::uint32_t> canonical_tets(const PointSet& pts, const Triangulation& tri) {
+  std::vector<std::uint32_t> t = finite_tets(tri);
+  const auto canon = canonical_point_ids(pts);
+  for (auto& v : t) v = canon[v];
+  return t;
+}
+
+PointSet lattice(int k, double scale = 1.0, double offset = 0.0) {
+  PointSet p;
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; j < k; ++j)
+      for (int l = 0; l < k; ++l) p.push_back(offset + scale * i, offset + scale * j, offset + scale * l);
+  return p;
+}
+
+TEST(Delaunay, ValidOnAllDistributionsAndOrders) {
+  for (Distribution d : all_distributions()) {
+    const PointSet pts = generate_points(d, 3000, 11);
+    std::vector<std::uint32_t> reference;
+    for (const std::string& name : order_kind_names()) {
+      const DelaunayResult r = run(pts, parse_order_kind(name));
+      const std::string what = std::string(distribution_name(d)) + "/" + name;
+      expect_valid(pts, r, what);
+      EXPECT_EQ(r.stats.inserted, pts.size()) << what;
+      EXPECT_GT(r.stats.orient_tests, 0u);
+      EXPECT_GE(r.stats.conflicts, r.stats.inserted - 4);  // every insertion deletes >= 1 tet
+      // General position: the Delaunay tetrahedralization is unique, so every order agrees.
+      const auto tets = canonical_tets(pts, r.tri);
+      if (reference.empty()) reference = tets;
+      EXPECT_TRUE(compare_tets(pts, reference, tets).same_set()) << what;
+    }
+  }
+}
+
+TEST(Delaunay, MatchesTetGenAndCgalInGeneralPosition) {
+  for (Distribution d : {Distribution::cube, Distribution::axes, Distribution::disk}) {
+    const PointSet pts = generate_points(d, 5000, 3);
+    const auto ours = canonical_tets(pts, run(pts).tri);
+    const ReferenceResult tg = tetgen_delaunay(pts);
+    const ReferenceResult cg = cgal_delaunay(pts, nullptr);
+    EXPECT_TRUE(compare_tets(pts, ours, tg.tets).same_set()) << distribution_name(d);
+    EXPECT_TRUE(compare_tets(pts, ours, cg.tets).same_set()) << distribution_name(d);
+  }
+}
+
+// A 10x10x10 lattice is maximally degenerate (cospherical and coplanar everywhere). The
+// perturbation is lexicographic, as in CGAL, so the result is the same for every insertion
+// order and is CGAL's tet set; TetGen breaks ties its own way, so only invariants are compared.
+TEST(Delaunay, IntegerLatticeIsValidOrderIndependentAndMatchesCgal) {
+  const PointSet pts = lattice(10);
+  const auto kd = run(pts, OrderKind::kd_bfs);
+  expect_valid(pts, kd, "lattice kd-bfs");
+  EXPECT_GT(kd.stats.exact_fallbacks, 0u);
+  const auto tets = canonical_tets(pts, kd.tri);
+  EXPECT_NEAR(total_volume(pts, tets), 729.0, 1e-9);
+  for (OrderKind k : {OrderKind::random, OrderKind::hilbert, OrderKind::input, OrderKind::kd_bfs_alt}) {
+    const auto r = run(pts, k);
+    expect_valid(pts, r, "lattice " + std::string(order_kind_name(k)));
+    EXPECT_TRUE(compare_tets(pts, tets, canonical_tets(pts, r.tri)).same_set()) << order_kind_name(k);
+  }
+  const ReferenceResult cg = cgal_delaunay(pts, nullptr);
+  EXPECT_TRUE(compare_tets(pts, tets, cg.tets).same_set());
+  const ReferenceResult tg = tetgen_delaunay(pts);
+  EXPECT_NEAR(total_volume(pts, tg.tets), 729.0, 1e-9);
+}
+
+TEST(Delaunay, DuplicatesAreReportedAndSkipped) {
+  PointSet pts = generate_points(Distribution::cube, 500, 5);
+  const std::size_t n = pts.size();
+  for (std::uint32_t i : {7u, 100u, 250u, 7u}) pts.push_back(pts.p(i)[0], pts.p(i)[1], pts.p(i)[2]);
+  const auto r = run(pts);
+  expect_valid(pts, r, "duplicates");
+  EXPECT_EQ(r.stats.inserted, n);
+  ASSERT_EQ(r.stats.duplicates.size(), 4u);
+  // Each reported pair really has identical coordinates.
+  for (std::size_t i = 0; i < r.stats.duplicates.size(); ++i) {
+    const double *a = pts.p(r.stats.duplicates[i]), *b = pts.p(r.stats.duplicate_of[i]);
+    EXPECT_TRUE(a[0] == b[0] && a[1] == b[1] && a[2] == b[2]);
+    EXPECT_NE(r.stats.duplicates[i], r.stats.duplicate_of[i]);
+  }
+  // Same tets as without the repeats.
+  PointSet base;
+  base.xyz.assign(pts.xyz.begin(), pts.xyz.begin() + 3 * n);
+  EXPECT_TRUE(compare_tets(pts, canonical_tets(pts, r.tri), canonical_tets(base, run(base).tri)).same_set());
+}
+
+TEST(Delaunay, TinyInputs) {
+  PointSet four;
+  for (const auto& q : {std::array<double, 3>{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}})
+    four.push_back(q[0], q[1], q[2]);
+  const auto r4 = run(four);
+  expect_valid(four, r4, "4 points");
+  EXPECT_EQ(finite_tets(r4.tri).size(), 4u);  // one tet
+  EXPECT_EQ(r4.tri.num_tets(), 5u);           // plus 4 infinite ones
+  PointSet five = four;
+  five.push_back(0.2, 0.2, 0.2);  // inside: splits the tet in 4
+  const auto r5 = run(five);
+  expect_valid(five, r5, "5 points inside");
+  EXPECT_EQ(finite_tets(r5.tri).size(), 16u);
+  PointSet five_out = four;
+  five_out.push_back(1, 1, 1);  // outside, cospherical with the other 4
+  expect_valid(five_out, run(five_out), "5 points outside");
+}
+
+TEST(Delaunay, DegenerateStarts) {
+  // The first points in insertion order are collinear, then coplanar (input order).
+  PointSet pts;
+  for (int i = 0; i < 20; ++i) pts.push_back(i, 0, 0);          // collinear
+  for (int i = 0; i < 20; ++i) pts.push_back(i % 5, i / 5 + 1, 0);  // coplanar (z = 0)
+  Rng rng(3);
+  for (int i = 0; i < 100; ++i) pts.push_back(rng.uniform(0, 20), rng.uniform(0, 5), rng.uniform(0.5, 3));
+  for (OrderKind k : {OrderKind::input, OrderKind::kd_bfs}) {
+    const auto r = run(pts, k);
+    expect_valid(pts, r, std::string("degenerate start ") + std::string(order_kind_name(k)));
+    EXPECT_EQ(r.stats.inserted, pts.size());
+  }
+}
+
+TEST(Delaunay, ExtremeScales) {
+  for (double scale : {1e-6, 1e6}) {
+    PointSet pts = generate_points(Distribution::cube, 2000, 9);
+    for (auto& x : pts.xyz) x = x * scale + 3 * scale;
+    expect_valid(pts, run(pts), "scale " + std::to_string(scale));
+    const PointSet lat = lattice(5, scale, scale);
+    expect_valid(lat, run(lat), "lattice scale " + std::to_string(scale));
+  }
+}
+
+TEST(Delaunay, Deterministic) {
+  const PointSet pts = generate_points(Distribution::spiral, 4000, 2);
+  const auto a = run(pts), b = run(pts);
+  EXPECT_EQ(a.tri.v, b.tri.v);
+  EXPECT_EQ(a.tri.adj, b.tri.adj);
+  EXPECT_EQ(a.stats.orient_tests, b.stats.orient_tests);
+  EXPECT_EQ(a.stats.conflicts, b.stats.conflicts);
+}
+
+TEST(Delaunay, ErrorsForInputsWithoutTetrahedralization) {
+  EXPECT_THROW(run(PointSet{}), GeometryError);
+  PointSet flat;
+  Rng rng(1);
+  for (int i = 0; i < 100; ++i) flat.push_back(rng.uniform(), rng.uniform(), 2.0);
+  try {
+    run(flat);
+    FAIL() << "coplanar input accepted";
+  } catch (const GeometryError& e) {
+    EXPECT_NE(std::string(e.what()).find("coplanar"), std::string::npos) << e.what();
+  }
+  PointSet line;
+  for (int i = 0; i < 10; ++i) line.push_back(i, 2 * i, 3 * i);
+  EXPECT_THROW(run(line), GeometryError);
+  PointSet same;
+  for (int i = 0; i < 3; ++i) same.push_back(1, 1, 1);
+  EXPECT_THROW(run(same), GeometryError);
+  PointSet three;
+  three.push_back(0, 0, 0);
+  three.push_back(1, 0, 0);
+  three.push_back(0, 1, 0);
+  EXPECT_THROW(run(three), GeometryError);
+}
+
+TEST(Delaunay, RejectsBadOrderings) {
+  const PointSet pts = generate_points(Distribution::cube, 10, 1);
+  Ordering o = make_order(pts, {OrderKind::input, 1, 0.125});
+  o.order[3] = o.order[4];  // not a permutation
+  EXPECT_THROW(delaunay(pts, o), UsageError);
+  Ordering short_o = make_order(pts, {OrderKind::input, 1, 0.125});
+  short_o.order.pop_back();
+  EXPECT_THROW(delaunay(pts, short_o), UsageError);
+}
+
+// The validity check itself must catch broken triangulations.
+TEST(DelaunayCheck, DetectsCorruption) {
+  const PointSet pts = generate_points(Distribution::cube, 300, 4);
+  const auto r = run(pts);
+  {  // swap two vertices of a finite tet: orientation flips
+    Triangulation t = r.tri;
+    for (std::size_t i = 0; i < t.num_tets(); ++i)
+      if (!t.is_infinite(i)) {
+        std::swap(t.v[4 * i], t.v[4 * i + 1]);
+        break;
+      }
+    EXPECT_FALSE(check_delaunay(pts, t).ok());
+  }
+  {  // break an adjacency
+    Triangulation t = r.tri;
+    std::swap(t.adj[0], t.adj[1]);
+    EXPECT_GT(check_delaunay(pts, t).asymmetric_adjacencies, 0u);
+  }
+  {  // move a point: the triangulation is no longer Delaunay (or no longer valid)
+    PointSet moved = pts;
+    moved.xyz[3 * 17] += 0.05;
+    EXPECT_FALSE(check_delaunay(moved, r.tri).ok());
+  }
+}
+
+}  // namespace
+}  // namespace kdmesh
