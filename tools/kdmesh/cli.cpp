@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "tools/kdmesh/cli.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <iostream>
+
+namespace kdmesh::cli {
+
+std::ostream& Output::human() const { return json ? std::cerr : std::cout; }
+
+void Output::stage(const std::string& msg) const {
+  if (!quiet) std::cerr << "kdmesh: " << msg << std::endl;
+}
+
+std::function<void(double)> Output::progress(const std::string& what) const {
+  if (quiet || !isatty(STDERR_FILENO)) return {};
+  return [what](double f) {
+    std::fprintf(stderr, "\rkdmesh: %s %5.1f%%%s", what.c_str(), 100.0 * f, f >= 1.0 ? "\n" : "");
+    std::fflush(stderr);
+  };
+}
+
+void Output::emit_json(const nlohmann::json& j) const {
+  if (json) std::cout << j.dump(2) << std::endl;
+}
+
+void add_output_flags(CLI::App* cmd, Output& out) {
+  cmd->add_flag("--json", out.json, "Print a machine-readable JSON summary on stdout");
+  cmd->add_flag("-q,--quiet", out.quiet, "No progress messages on stderr");
+}
+
+}  // namespace kdmesh::cli

@@ -1,0 +1,253 @@
+// kdmesh delaunay — tetrahedralize a point set, optionally verify it three ways, write VTU.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+#include <string>
+
+#include "core/error.h"
+#include "core/timer.h"
+#include "io/points_io.h"
+#include "io/vtu_writer.h"
+#include "mesher/delaunay.h"
+#include "mesher/delaunay_check.h"
+#include "mesher/order.h"
+#include "mesher/reference_delaunay.h"
+#include "mesher/tet_adjacency.h"
+#include "mesher/tet_compare.h"
+#include "tools/kdmesh/cli.h"
+
+namespace kdmesh::cli {
+
+namespace {
+
+struct Options {
+  std::string input;
+  std::string order = "kd-bfs";
+  std::string kernel = "kdmesh";
+  std::uint64_t seed = 1;
+  bool check = false;
+  std::string output;
+  Output out;
+};
+
+std::string tets_str(const std::vector<std::uint32_t>& t) {
+  std::ostringstream s;
+  for (std::size_t i = 0; i + 3 < t.size(); i += 4)
+    s << (i ? ", " : "") << "(" << t[i] << " " << t[i + 1] << " " << t[i + 2] << " " << t[i + 3] << ")";
+  return s.str();
+}
+
+/// One cross-kernel comparison. In general position (no perturbation-only ties) the Delaunay
+/// tetrahedralization is unique, so the tet sets must be identical; otherwise correct kernels
+/// may break ties differently and only the invariants (volume) must agree.
+nlohmann::json compare_with(const std::string& name, const PointSet& pts,
+                            const std::vector<std::uint32_t>& ours,
+                            const std::vector<std::uint32_t>& theirs, bool general_position,
+                            double seconds, const Output& out, bool& ok) {
+  const TetComparison c = compare_tets(pts, ours, theirs);
+  const double rel = std::fabs(c.volume_a - c.volume_b) / std::max(std::fabs(c.volume_a), 1e-300);
+  const bool pass = general_position ? c.same_set() : rel <= 1e-9;
+  ok = ok && pass;
+  out.human() << "  " << std::left << std::setw(8) << name << (pass ? "ok " : "FAIL ")
+              << " tets " << c.tets_a << " vs " << c.tets_b << ", volume rel. diff "
+              << std::setprecision(3) << rel << ", "
+              << (c.same_set() ? "identical tet set"
+                               : std::to_string(c.only_in_a) + " tets only ours, " +
+                                     std::to_string(c.only_in_b) + " only theirs")
+              << (general_position ? "" : " (cospherical ties: sets may differ)") << " ["
+              << seconds << " s]\n";
+  if (!c.same_set() && general_position)
+    out.human() << "    only ours: " << tets_str(c.example_only_a)
+                << "\n    only " << name << ": " << tets_str(c.example_only_b) << "\n";
+  return {{"pass", pass},          {"tets", c.tets_a},          {"reference_tets", c.tets_b},
+          {"volume", c.volume_a},  {"reference_volume", c.volume_b},
+          {"identical", c.same_set()}, {"only_ours", c.only_in_a}, {"only_reference", c.only_in_b},
+          {"seconds", seconds}};
+}
+
+nlohmann::json run_checks(const Options& o, const PointSet& pts, const Triangulation& tri,
+                          const std::vector<std::uint32_t>& canon_tets) {
+  const Output& out = o.out;
+  bool ok = true;
+  nlohmann::json j;
+  out.stage("check: exact validity");
+  Stopwatch clock;
+  const ValidityReport v = check_delaunay(pts, tri);
+  const bool general = v.tie_faces == 0;
+  out.human() << "check:\n  validity " << (v.ok() ? "ok " : "FAIL ") << " " << v.finite_tets
+              << " tets, " << v.hull_faces << " hull faces, adjacency faults "
+              << v.asymmetric_adjacencies << ", inverted " << v.bad_orientation
+              << ", non-Delaunay faces " << v.non_delaunay_faces << ", tie faces " << v.tie_faces
+              << ", volume " << std::setprecision(12) << v.volume << " vs hull " << v.hull_volume
+              << std::setprecision(6) << " [" << clock.seconds() << " s]\n";
+  for (const std::string& p : v.problems) out.human() << "    " << p << "\n";
+  ok = ok && v.ok();
+  j["validity"] = {{"pass", v.ok()},
+                   {"finite_tets", v.finite_tets},
+                   {"hull_faces", v.hull_faces},
+                   {"asymmetric_adjacencies", v.asymmetric_adjacencies},
+                   {"bad_orientation", v.bad_orientation},
+                   {"non_delaunay_faces", v.non_delaunay_faces},
+                   {"tie_faces", v.tie_faces},
+                   {"volume", v.volume},
+                   {"hull_volume", v.hull_volume},
+                   {"problems", v.problems},
+                   {"seconds", clock.seconds()}};
+  j["general_position"] = general;
+
+  out.stage("check: TetGen 1.5");
+  const ReferenceResult tg = tetgen_delaunay(pts);
+  j["tetgen"] = compare_with("tetgen", pts, canon_tets, tg.tets, general, tg.seconds, out, ok);
+
+  if (o.kernel == "kdmesh") {
+    out.stage("check: CGAL 5.5");
+    const ReferenceResult cg = cgal_delaunay(pts, nullptr);
+    j["cgal"] = compare_with("cgal", pts, canon_tets, cg.tets, general, cg.seconds, out, ok);
+  } else {
+    out.stage("check: kdmesh kernel");
+    Stopwatch c2;
+    const DelaunayResult r = delaunay(pts, make_order(pts, {OrderKind::kd_bfs, o.seed, 0.125}));
+    auto ours = finite_tets(r.tri);
+    const auto canon = canonical_point_ids(pts);
+    for (auto& x : ours) x = canon[x];
+    j["kdmesh"] = compare_with("kdmesh", pts, canon_tets, ours, general, c2.seconds(), out, ok);
+  }
+  j["pass"] = ok;
+  return j;
+}
+
+int run_delaunay(const Options& o) {
+  const Output& out = o.out;
+  Stopwatch total, clock;
+  nlohmann::json j = {{"command", "delaunay"}, {"input", o.input}, {"order", o.order}, {"kernel", o.kernel}};
+
+  out.stage("reading " + o.input);
+  const PointSet pts = read_points(o.input);
+  const double t_read = clock.seconds();
+  const std::size_t n = pts.size();
+  out.stage(std::to_string(n) + " points");
+
+  clock.reset();
+  const bool cgal_sort = o.order == "cgal";
+  if (cgal_sort && o.kernel != "cgal")
+    throw UsageError("--order cgal means CGAL's own insert(range) order and needs --kernel cgal");
+  Ordering ord;
+  if (!cgal_sort) ord = make_order(pts, {parse_order_kind(o.order), o.seed, 0.125});
+  const double t_order = clock.seconds();
+
+  clock.reset();
+  out.stage("tetrahedralizing (" + o.kernel + " kernel, " + o.order + " order)");
+  std::vector<std::uint32_t> tets;
+  Triangulation tri;
+  nlohmann::json counts;
+  if (o.kernel == "kdmesh") {
+    DelaunayOptions opt;
+    opt.progress = out.progress("delaunay");
+    DelaunayResult r = delaunay(pts, ord, opt);
+    tri = std::move(r.tri);
+    tets = finite_tets(tri);
+    const double k = double(std::max<std::uint64_t>(r.stats.inserted, 1));
+    counts = {{"inserted", r.stats.inserted},
+              {"duplicates", r.stats.duplicates.size()},
+              {"orient_tests_per_point", double(r.stats.orient_tests) / k},
+              {"conflicts_per_point", double(r.stats.conflicts) / k},
+              {"exact_fallbacks", r.stats.exact_fallbacks}};
+    for (std::size_t i = 0; i < r.stats.duplicates.size(); ++i) {
+      if (i == 10) {
+        out.human() << "  ... " << r.stats.duplicates.size() - 10 << " more duplicates\n";
+        break;
+      }
+      out.human() << "  duplicate: point " << r.stats.duplicates[i] << " repeats point "
+                  << r.stats.duplicate_of[i] << " (skipped)\n";
+    }
+    j["duplicates"] = nlohmann::json::array();
+    for (std::size_t i = 0; i < std::min<std::size_t>(r.stats.duplicates.size(), 1000); ++i)
+      j["duplicates"].push_back({r.stats.duplicates[i], r.stats.duplicate_of[i]});
+  } else {
+    const ReferenceResult r = cgal_delaunay(pts, cgal_sort ? nullptr : &ord);
+    tets = r.tets;
+    counts = {{"inserted", r.num_vertices}, {"duplicates", n - r.num_vertices}};
+  }
+  if (tets.empty())
+    throw GeometryError("no tetrahedra: the points span no volume (coplanar or fewer than 4)");
+  const double t_del = clock.seconds();
+  const std::size_t num_tets = tets.size() / 4;
+
+  out.human() << "delaunay: " << n << " points, " << tets.size() / 4 << " tets, kernel " << o.kernel
+              << ", order " << o.order << "\n";
+  if (counts.contains("orient_tests_per_point"))
+    out.human() << "  orientation tests per point " << std::setprecision(4)
+                << counts["orient_tests_per_point"].get<double>() << ", conflicts per point "
+                << counts["conflicts_per_point"].get<double>() << ", exact fallbacks "
+                << counts["exact_fallbacks"].get<std::uint64_t>() << "\n";
+  out.human() << std::setprecision(4) << "  time: read " << t_read << " s, order " << t_order
+              << " s, delaunay " << t_del << " s\n";
+
+  double t_check = 0;
+  if (o.check) {
+    clock.reset();
+    std::vector<std::uint32_t> canon_tets = tets;
+    const auto canon = canonical_point_ids(pts);
+    for (auto& x : canon_tets) x = canon[x];
+    if (o.kernel != "kdmesh") tri = triangulation_from_tets(canon_tets);
+    j["check"] = run_checks(o, pts, tri, canon_tets);
+    t_check = clock.seconds();
+  }
+
+  double t_write = 0;
+  if (!o.output.empty() && (!o.check || j["check"]["pass"].get<bool>())) {
+    clock.reset();
+    out.stage("writing " + o.output);
+    TetMesh mesh;
+    mesh.points = pts;
+    mesh.tets = std::move(tets);
+    if (!cgal_sort) {
+      DataArray rank{"insertion_rank", std::vector<std::int32_t>(n), {}};
+      for (std::size_t k = 0; k < n; ++k) rank.ints[ord.order[k]] = std::int32_t(k);
+      mesh.point_data.push_back(std::move(rank));
+    }
+    if (!ord.level.empty()) {
+      DataArray level{"kd_level", std::vector<std::int32_t>(n), {}};
+      for (std::size_t k = 0; k < n; ++k) level.ints[ord.order[k]] = ord.level[k];
+      mesh.point_data.push_back(std::move(level));
+    }
+    write_vtu(mesh, o.output);
+    t_write = clock.seconds();
+    j["output"] = o.output;
+  }
+  j["points"] = n;
+  j["tets"] = num_tets;
+  j["counts"] = counts;
+  j["seconds"] = {{"read", t_read}, {"order", t_order}, {"delaunay", t_del},
+                  {"check", t_check}, {"write", t_write}, {"total", total.seconds()}};
+  out.emit_json(j);
+  if (o.check && !j["check"]["pass"].get<bool>())
+    throw CheckError("verification failed (see above); no mesh was written");
+  return 0;
+}
+
+}  // namespace
+
+void add_delaunay_command(CLI::App& app, Runner& run) {
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("delaunay", "Delaunay tetrahedralization of a point set (.xyz, .node, .ply)");
+  cmd->add_option("input", o->input, "Point file")->required()->check(CLI::ExistingFile);
+  std::vector<std::string> orders = order_kind_names();
+  orders.push_back("cgal");
+  cmd->add_option("--order", o->order, "Insertion order (cgal: CGAL's own, with --kernel cgal)")
+      ->check(CLI::IsMember(orders))
+      ->capture_default_str();
+  cmd->add_option("--kernel", o->kernel, "Delaunay kernel")
+      ->check(CLI::IsMember({"kdmesh", "cgal"}))
+      ->capture_default_str();
+  cmd->add_option("--seed", o->seed, "Seed of the random and brio orders")->capture_default_str();
+  cmd->add_flag("--check", o->check,
+                "Verify: exact validity, then compare with TetGen 1.5 and CGAL 5.5; exit 5 on mismatch");
+  cmd->add_option("-o,--output", o->output, "Output .vtu file (binary, compressed)");
+  add_output_flags(cmd, o->out);
+  cmd->callback([o, &run] { run = [o] { return run_delaunay(*o); }; });
+}
+
+}  // namespace kdmesh::cli

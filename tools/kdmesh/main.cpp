@@ -1,0 +1,35 @@
+// kdmesh — command-line entry point. Every subcommand has --help; errors print one line and
+// exit with the code of their class (core/error.h, README "Exit codes").
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <iostream>
+#include <new>
+
+#include "core/error.h"
+#include "tools/kdmesh/cli.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"kdmesh — tetrahedral mesh generator (kd-tree BFS insertion, exact Delaunay)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "kdmesh 0.1.0");
+  kdmesh::cli::Runner run;
+  kdmesh::cli::add_points_command(app, run);
+  kdmesh::cli::add_delaunay_command(app, run);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : int(kdmesh::ExitCode::usage);
+  }
+  try {
+    return run();
+  } catch (const kdmesh::Error& e) {
+    std::cerr << "kdmesh: error: " << e.what() << std::endl;
+    return int(e.code());
+  } catch (const std::bad_alloc&) {
+    std::cerr << "kdmesh: error: out of memory" << std::endl;
+    return int(kdmesh::ExitCode::failure);
+  } catch (const std::exception& e) {
+    std::cerr << "kdmesh: internal error: " << e.what() << std::endl;
+    return int(kdmesh::ExitCode::failure);
+  }
+}
