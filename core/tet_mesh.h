@@ -16,9 +16,11 @@ inline constexpr std::uint32_t kInfiniteVertex = std::numeric_limits<std::uint32
 /// A full Delaunay triangulation of a point set, closed by an infinite vertex
 /// (the kernel's native form; what the validity checker reads).
 ///
-/// Tet t has vertices v[4t+0..3] (point ids, or kInfiniteVertex) and neighbours adj[4t+0..3].
-///  - Face i of tet t is the face opposite v[4t+i].
-///  - adj[4t+i] = 4*u + j means: face i of t is face j of tet u.
+/// Each tet is one 32-byte record of 8 uint32 in `data`: its vertices v(t,0..3) (point ids, or
+/// kInfiniteVertex), then its neighbours adj(t,0..3). Keeping both in one record means a
+/// cavity step touches one cache line, not two arrays.
+///  - Face i of tet t is the face opposite v(t,i).
+///  - adj(t,i) = 4*u + j means: face i of t is face j of tet u ("face reference").
 ///  - Finite tets are positively oriented: det[v1-v0, v2-v0, v3-v0] > 0, i.e. v3 lies on the
 ///    side of plane (v0,v1,v2) that (v1-v0)x(v2-v0) points to; (0, e1, e2, e3) is positive.
 ///    This is VTK_TETRA's convention and kdmesh's everywhere (mesher/predicates.h: orient3d).
@@ -26,13 +28,19 @@ inline constexpr std::uint32_t kInfiniteVertex = std::numeric_limits<std::uint32
 ///    hull across its finite face gives a positively oriented tet.
 /// Every tet in the arrays is alive (no holes).
 struct Triangulation {
-  std::vector<std::uint32_t> v;
-  std::vector<std::uint32_t> adj;
+  std::vector<std::uint32_t> data;  ///< 8 per tet: v0 v1 v2 v3 adj0 adj1 adj2 adj3
 
-  std::size_t num_tets() const { return v.size() / 4; }
+  std::size_t num_tets() const { return data.size() / 8; }
+  std::uint32_t v(std::size_t t, int i) const { return data[8 * t + i]; }
+  std::uint32_t adj(std::size_t t, int i) const { return data[8 * t + 4 + i]; }
+  std::uint32_t& v(std::size_t t, int i) { return data[8 * t + i]; }
+  std::uint32_t& adj(std::size_t t, int i) { return data[8 * t + 4 + i]; }
+  /// The vertex opposite face reference f = 4*u + j, i.e. v(u, j).
+  std::uint32_t opposite(std::uint32_t f) const { return data[8 * std::size_t(f >> 2) + (f & 3)]; }
   bool is_infinite(std::size_t t) const {
-    return v[4 * t] == kInfiniteVertex || v[4 * t + 1] == kInfiniteVertex ||
-           v[4 * t + 2] == kInfiniteVertex || v[4 * t + 3] == kInfiniteVertex;
+    const std::uint32_t* x = &data[8 * t];
+    return x[0] == kInfiniteVertex || x[1] == kInfiniteVertex || x[2] == kInfiniteVertex ||
+           x[3] == kInfiniteVertex;
   }
 };
 

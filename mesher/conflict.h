@@ -8,14 +8,14 @@
 
 namespace kdmesh {
 
-/// Is point p (not a vertex of tet t) in conflict with tet t of a triangulation with arrays
-/// V/A (see Triangulation)? Finite tet: p strictly inside the circumsphere (perturbed, never a
+/// Is point p (not a vertex of tet t) in conflict with tet t of a triangulation whose tet
+/// records (8 uint32 per tet: 4 vertices, 4 face references) are `T` (see Triangulation)? Finite tet: p strictly inside the circumsphere (perturbed, never a
 /// tie). Infinite tet: p strictly beyond its hull face, or in the plane of that face and inside
 /// its circumcircle (perturbed). `xyz` holds 3 coordinates per point id.
-inline bool tet_in_conflict(const double* xyz, const std::uint32_t* V, const std::uint32_t* A,
-                            std::uint32_t t, const double* p) {
+inline bool tet_in_conflict(const double* xyz, const std::uint32_t* T, std::uint32_t t,
+                            const double* p) {
   auto P = [xyz](std::uint32_t id) { return xyz + 3 * std::size_t(id); };
-  const std::uint32_t* v = V + 4 * std::size_t(t);
+  const std::uint32_t* v = T + 8 * std::size_t(t);
   int inf = -1;
   for (int i = 0; i < 4; ++i)
     if (v[i] == kInfiniteVertex) inf = i;
@@ -26,7 +26,8 @@ inline bool tet_in_conflict(const double* xyz, const std::uint32_t* V, const std
   if (o != 0) return o > 0;
   // p lies in the plane of the hull face: in conflict iff inside its circumcircle. The apex of
   // the finite tet behind the face is a reference point off that plane.
-  const std::uint32_t apex = V[A[4 * std::size_t(t) + inf]];
+  const std::uint32_t behind = v[4 + inf];  // face reference 4*u+j of the finite tet
+  const std::uint32_t apex = T[8 * std::size_t(behind >> 2) + (behind & 3)];
   const double* f[3];
   for (int i = 0, k = 0; i < 4; ++i)
     if (i != inf) f[k++] = P(v[i]);

@@ -1,7 +1,8 @@
 // kdmesh — incremental Bowyer–Watson Delaunay kernel.
 //
-// Storage: flat arrays, 4 vertex ids (V) and 4 adjacency entries (A) per tet; A[4t+i] = 4u+j
-// means face i of t (opposite V[4t+i]) is face j of u. An infinite vertex closes the hull,
+// Storage: one flat array of 32-byte tet records (core/tet_mesh.h: Triangulation): 4 vertex
+// ids then 4 face references; adj(t,i) = 4u+j means face i of t (opposite v(t,i)) is face j
+// of u. An infinite vertex closes the hull,
 // so every face has a neighbour and the triangulation is a closed 3-sphere.
 // Insertion: stochastic visibility walk from the hint's tet; cavity grown breadth-first with
 // the perturbed insphere test; the star of the new point is built over the cavity boundary;
@@ -29,7 +30,9 @@ constexpr std::uint32_t kInf = kInfiniteVertex;
 constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 constexpr std::uint32_t kAliasBit = 0x80000000u;  // v2t entry of a duplicate: alias | vertex id
 constexpr std::uint32_t kDead = 0xFFFFFFFEu;      // V[4t] of a tet on the free list
-constexpr std::size_t kMaxPoints = std::size_t(1) << 28;  // keeps tet ids below 2^31
+// Face references 4*t+f must fit in 32 bits: tets < 2^30. Delaunay tetrahedralizations have
+// about 6.7 tets per point (at most ~7.5 in practice), so 2^27 points stay well inside.
+constexpr std::size_t kMaxPoints = std::size_t(1) << 27;
 
 enum : std::uint8_t { kUnvisited = 0, kInCavity = 1, kOutside = 2 };
 
@@ -78,7 +81,7 @@ class EdgeMap {
 struct BoundaryFace {
   std::array<std::uint32_t, 4> v;  // vertices of the cavity tet, the face's opposite slot := p
   std::uint32_t slot;              // the slot that now holds p
-  std::uint32_t outer;             // 4*u+j of the tet outside the cavity across this face
+  std::uint32_t outer;             // face reference 4*u+j of the tet outside the cavity
 };
 
 class Kernel {
@@ -86,9 +89,10 @@ class Kernel {
   Kernel(const PointSet& points, DelaunayStats& stats)
       : xyz_(points.xyz.data()), n_(points.size()), stats_(stats), rng_(0x6b646d657368ULL) {
     v2t_.assign(n_, kNone);
-    const std::size_t expect = n_ * 7 + 64;
-    V_.reserve(4 * expect);
-    A_.reserve(4 * expect);
+    // ~6.7 tets per point for uniform points; reserving avoids the 2x spike of a late
+    // reallocation (the vector still grows if a distribution needs more).
+    const std::size_t expect = n_ * 27 / 4 + 64;
+    T_.reserve(8 * expect);
     state_.reserve(expect);
   }
 
@@ -110,10 +114,10 @@ class Kernel {
       for (std::uint32_t f = 0; f < 4; ++f)
         for (std::uint32_t u = 0; u < 5; ++u)
           for (std::uint32_t g = 0; g < 4; ++g)
-            if (u != t && same_face(t, f, u, g)) A_[4 * t + f] = 4 * u + g;
+            if (u != t && same_face(t, f, u, g)) adj(t, f) = 4 * u + g;
     for (std::uint32_t t = 0; t < 5; ++t)
       for (int i = 0; i < 4; ++i)
-        if (V_[4 * t + i] != kInf) v2t_[V_[4 * t + i]] = t;
+        if (vert(t, i) != kInf) v2t_[vert(t, i)] = t;
     last_ = 0;
     stats_.inserted = 4;
   }
@@ -130,7 +134,7 @@ class Kernel {
     const std::uint32_t base = locate(p, start);
     if (!is_infinite(base)) {
       for (int i = 0; i < 4; ++i) {
-        const std::uint32_t w = V_[4 * base + i];
+        const std::uint32_t w = vert(base, i);
         const double* q = P(w);
         if (q[0] == p[0] && q[1] == p[1] && q[2] == p[2]) {
           stats_.duplicates.push_back(pid);
@@ -145,27 +149,31 @@ class Kernel {
     ++stats_.inserted;
   }
 
-  /// Moves the (compacted) arrays out.
+  /// Moves the (compacted) records out.
   Triangulation release() {
     compact();
     Triangulation tri;
-    tri.v = std::move(V_);
-    tri.adj = std::move(A_);
+    tri.data = std::move(T_);
     return tri;
   }
 
  private:
+  std::uint32_t& vert(std::uint32_t t, int i) { return T_[8 * std::size_t(t) + i]; }
+  std::uint32_t& adj(std::uint32_t t, int i) { return T_[8 * std::size_t(t) + 4 + i]; }
+  /// The adjacency slot addressed by face reference f = 4*t+i.
+  std::uint32_t& adj_of(std::uint32_t f) { return T_[8 * std::size_t(f >> 2) + 4 + (f & 3)]; }
+
   bool is_infinite(std::uint32_t t) const {
-    const std::uint32_t* v = &V_[4 * std::size_t(t)];
+    const std::uint32_t* v = &T_[8 * std::size_t(t)];
     return v[0] == kInf || v[1] == kInf || v[2] == kInf || v[3] == kInf;
   }
 
-  bool same_face(std::uint32_t t, std::uint32_t f, std::uint32_t u, std::uint32_t g) const {
+  bool same_face(std::uint32_t t, std::uint32_t f, std::uint32_t u, std::uint32_t g) {
     std::array<std::uint32_t, 3> x{}, y{};
     for (int i = 0, k = 0; i < 4; ++i)
-      if (i != int(f)) x[k++] = V_[4 * t + i];
+      if (i != int(f)) x[k++] = vert(t, i);
     for (int i = 0, k = 0; i < 4; ++i)
-      if (i != int(g)) y[k++] = V_[4 * u + i];
+      if (i != int(g)) y[k++] = vert(u, i);
     std::sort(x.begin(), x.end());
     std::sort(y.begin(), y.end());
     return x == y;
@@ -176,38 +184,41 @@ class Kernel {
     if (!free_.empty()) {
       t = free_.back();
       free_.pop_back();
-      std::copy(v.begin(), v.end(), V_.begin() + 4 * std::size_t(t));
     } else {
-      t = std::uint32_t(V_.size() / 4);
-      V_.insert(V_.end(), v.begin(), v.end());
-      A_.insert(A_.end(), 4, kNone);
+      t = std::uint32_t(T_.size() / 8);
+      T_.resize(T_.size() + 8, kNone);
       state_.push_back(kUnvisited);
     }
+    std::copy(v.begin(), v.end(), T_.begin() + 8 * std::size_t(t));
     return t;
   }
 
   /// Visibility walk: from `t`, cross any face that separates t from p, until p is in the
   /// closed tet (finite result) or beyond a hull face (infinite result, in conflict with p).
+  /// The first face tried is random, which makes the walk terminate on any triangulation.
   std::uint32_t locate(const double* p, std::uint32_t t) {
     if (is_infinite(t)) {
       int i = 0;
-      while (V_[4 * t + i] != kInf) ++i;
-      t = A_[4 * t + i] >> 2;  // the finite tet behind the hull face
+      while (vert(t, i) != kInf) ++i;
+      t = adj(t, i) >> 2;  // the finite tet behind the hull face
     }
     std::uint32_t prev = kNone;
-    const std::size_t limit = 16 + 4 * (V_.size() / 4);
+    const std::size_t limit = 16 + T_.size() / 2;
     for (std::size_t steps = 0; steps < limit; ++steps) {
       const std::uint32_t r = std::uint32_t(rng_.next() >> 62);
-      const std::uint32_t* v = &V_[4 * std::size_t(t)];
+      const std::uint32_t* rec = &T_[8 * std::size_t(t)];
+      const double* q[4] = {P(rec[0]), P(rec[1]), P(rec[2]), P(rec[3])};
       std::uint32_t next = kNone;
       for (std::uint32_t j = 0; j < 4; ++j) {
         const std::uint32_t f = (j + r) & 3;
-        const std::uint32_t n = A_[4 * t + f] >> 2;
+        const std::uint32_t n = rec[4 + f] >> 2;
         if (n == prev) continue;  // p is on t's side of that face (tested from the other side)
-        const double* q[4] = {P(v[0]), P(v[1]), P(v[2]), P(v[3])};
+        const double* saved = q[f];
         q[f] = p;
         ++stats_.orient_tests;
-        if (pred::orient3d(q[0], q[1], q[2], q[3]) < 0) {
+        const int o = pred::orient3d(q[0], q[1], q[2], q[3]);
+        q[f] = saved;
+        if (o < 0) {
           next = n;
           break;
         }
@@ -220,10 +231,6 @@ class Kernel {
     throw Error("delaunay: point location did not terminate (internal error)");
   }
 
-  bool in_conflict(std::uint32_t t, const double* p) const {
-    return tet_in_conflict(xyz_, V_.data(), A_.data(), t, p);
-  }
-
   void grow_cavity(std::uint32_t base, const double* p) {
     cavity_.clear();
     touched_.clear();
@@ -232,9 +239,9 @@ class Kernel {
     for (std::size_t i = 0; i < cavity_.size(); ++i) {
       const std::uint32_t c = cavity_[i];
       for (int f = 0; f < 4; ++f) {
-        const std::uint32_t n = A_[4 * c + f] >> 2;
+        const std::uint32_t n = adj(c, f) >> 2;
         if (state_[n] != kUnvisited) continue;
-        if (in_conflict(n, p)) {
+        if (tet_in_conflict(xyz_, T_.data(), n, p)) {
           state_[n] = kInCavity;
           cavity_.push_back(n);
         } else {
@@ -251,10 +258,10 @@ class Kernel {
     boundary_.clear();
     for (std::uint32_t c : cavity_)
       for (std::uint32_t f = 0; f < 4; ++f) {
-        const std::uint32_t outer = A_[4 * c + f];
+        const std::uint32_t outer = adj(c, f);
         if (state_[outer >> 2] == kInCavity) continue;
         BoundaryFace b;
-        std::memcpy(b.v.data(), &V_[4 * std::size_t(c)], sizeof(b.v));
+        std::memcpy(b.v.data(), &T_[8 * std::size_t(c)], sizeof(b.v));
         b.v[f] = pid;
         b.slot = f;
         b.outer = outer;
@@ -264,15 +271,15 @@ class Kernel {
     // 2. Dead cavity tets become free slots; new tets take them first.
     for (std::uint32_t c : cavity_) {
       state_[c] = kUnvisited;
-      V_[4 * std::size_t(c)] = kDead;
+      vert(c, 0) = kDead;
       free_.push_back(c);
     }
     edges_.reset(boundary_.size() * 3 / 2 + 1);
     std::uint32_t t = kNone;
     for (const BoundaryFace& b : boundary_) {
       t = new_tet(b.v);
-      A_[4 * t + b.slot] = b.outer;
-      A_[b.outer] = 4 * t + b.slot;
+      adj(t, b.slot) = b.outer;
+      adj_of(b.outer) = 4 * t + b.slot;
       // The other 3 faces contain p and one edge of the boundary face: pair them by edge.
       for (std::uint32_t j = 0; j < 4; ++j) {
         if (j == b.slot) continue;
@@ -281,8 +288,8 @@ class Kernel {
           if (i != j && i != b.slot) e[k++] = b.v[i];
         const std::uint32_t other = edges_.match(e[0], e[1], 4 * t + j);
         if (other != kNone) {
-          A_[4 * t + j] = other;
-          A_[other] = 4 * t + j;
+          adj(t, j) = other;
+          adj_of(other) = 4 * t + j;
         }
       }
       for (std::uint32_t i = 0; i < 4; ++i)
@@ -291,25 +298,24 @@ class Kernel {
     last_ = t;
   }
 
-  /// Removes free-list holes so that every tet in the arrays is alive.
+  /// Removes free-list holes so that every tet in the array is alive.
   void compact() {
     if (free_.empty()) return;
-    const std::size_t m = V_.size() / 4;
+    const std::size_t m = T_.size() / 8;
     std::vector<std::uint32_t> remap(m, kNone);
     std::uint32_t next = 0;
     for (std::size_t t = 0; t < m; ++t)
-      if (V_[4 * t] != kDead) remap[t] = next++;
+      if (T_[8 * t] != kDead) remap[t] = next++;
     for (std::size_t t = 0; t < m; ++t) {
       if (remap[t] == kNone) continue;
-      const std::size_t d = 4 * std::size_t(remap[t]);
+      const std::size_t d = 8 * std::size_t(remap[t]);
       for (int i = 0; i < 4; ++i) {
-        V_[d + i] = V_[4 * t + i];
-        const std::uint32_t a = A_[4 * t + i];
-        A_[d + i] = 4 * remap[a >> 2] + (a & 3);
+        T_[d + i] = T_[8 * t + i];
+        const std::uint32_t a = T_[8 * t + 4 + i];
+        T_[d + 4 + i] = 4 * remap[a >> 2] + (a & 3);
       }
     }
-    V_.resize(4 * std::size_t(next));
-    A_.resize(4 * std::size_t(next));
+    T_.resize(8 * std::size_t(next));
     free_.clear();
   }
 
@@ -317,7 +323,7 @@ class Kernel {
   std::size_t n_;
   DelaunayStats& stats_;
   Rng rng_;
-  std::vector<std::uint32_t> V_, A_;
+  std::vector<std::uint32_t> T_;  // tet records, 8 per tet
   std::vector<std::uint8_t> state_;
   std::vector<std::uint32_t> v2t_;
   std::vector<std::uint32_t> free_;
@@ -417,9 +423,10 @@ DelaunayResult delaunay(const PointSet& points, const Ordering& order,
 
 std::vector<std::uint32_t> finite_tets(const Triangulation& tri) {
   std::vector<std::uint32_t> out;
-  out.reserve(tri.v.size());
+  out.reserve(tri.data.size() / 2);
   for (std::size_t t = 0; t < tri.num_tets(); ++t)
-    if (!tri.is_infinite(t)) out.insert(out.end(), tri.v.begin() + 4 * t, tri.v.begin() + 4 * t + 4);
+    if (!tri.is_infinite(t))
+      out.insert(out.end(), tri.data.begin() + 8 * t, tri.data.begin() + 8 * t + 4);
   return out;
 }
 

@@ -20,7 +20,7 @@ namespace {
 std::string tet_str(const Triangulation& tri, std::size_t t) {
   std::string s = "tet " + std::to_string(t) + " (";
   for (int i = 0; i < 4; ++i) {
-    const std::uint32_t v = tri.v[4 * t + i];
+    const std::uint32_t v = tri.v(t, i);
     s += (i ? " " : "") + (v == kInfiniteVertex ? std::string("inf") : std::to_string(v));
   }
   return s + ")";
@@ -29,7 +29,7 @@ std::string tet_str(const Triangulation& tri, std::size_t t) {
 std::array<std::uint32_t, 3> face_of(const Triangulation& tri, std::size_t t, int f) {
   std::array<std::uint32_t, 3> x{};
   for (int i = 0, k = 0; i < 4; ++i)
-    if (i != f) x[k++] = tri.v[4 * t + i];
+    if (i != f) x[k++] = tri.v(t, i);
   std::sort(x.begin(), x.end());
   return x;
 }
@@ -37,7 +37,7 @@ std::array<std::uint32_t, 3> face_of(const Triangulation& tri, std::size_t t, in
 /// Is the face (t, f) with opposite vertex q decided by the perturbation alone (the
 /// unperturbed test is exactly 0)? For a hull face: q coplanar with it and on its circumcircle.
 bool is_tie(const PointSet& points, const Triangulation& tri, std::size_t t, int f, std::uint32_t q) {
-  const std::uint32_t* v = &tri.v[4 * t];
+  const std::uint32_t* v = &tri.data[8 * t];
   int inf = -1;
   for (int i = 0; i < 4; ++i)
     if (v[i] == kInfiniteVertex) inf = i;
@@ -50,7 +50,7 @@ bool is_tie(const PointSet& points, const Triangulation& tri, std::size_t t, int
   if (pred::orient3d(p[0], p[1], p[2], p[3]) != 0) return false;
   // Coplanar: a tie only if q is on the circumcircle of the hull face. The sphere through the
   // face and the apex behind it meets the plane in that circle.
-  const double* apex = points.p(tri.v[tri.adj[4 * t + inf]]);
+  const double* apex = points.p(tri.opposite(tri.adj(t, inf)));
   const double* a[3];
   for (int i = 0, k = 0; i < 4; ++i)
     if (i != inf) a[k++] = points.p(v[i]);
@@ -68,9 +68,9 @@ ValidityReport check_delaunay(const PointSet& points, const Triangulation& tri,
   };
   const std::size_t m = tri.num_tets();
   const std::size_t n = points.size();
-  if (tri.adj.size() != tri.v.size()) {
+  if (tri.data.size() % 8 != 0) {
     r.asymmetric_adjacencies = 1;
-    problem("vertex and adjacency arrays differ in length");
+    problem("tet records are not 8 entries each");
     return r;
   }
 
@@ -80,7 +80,7 @@ ValidityReport check_delaunay(const PointSet& points, const Triangulation& tri,
   for (std::size_t t = 0; t < m; ++t) {
     int inf = 0;
     for (int i = 0; i < 4; ++i) {
-      const std::uint32_t v = tri.v[4 * t + i];
+      const std::uint32_t v = tri.v(t, i);
       if (v == kInfiniteVertex) ++inf;
       else if (v >= n) {
         structure_ok = false;
@@ -92,9 +92,9 @@ ValidityReport check_delaunay(const PointSet& points, const Triangulation& tri,
       problem(tet_str(tri, t) + ": more than one infinite vertex");
     }
     for (int f = 0; f < 4; ++f) {
-      const std::uint32_t a = tri.adj[4 * t + f];
+      const std::uint32_t a = tri.adj(t, f);
       const std::size_t u = a >> 2;
-      if (u >= m || tri.adj[a] != 4 * t + f || face_of(tri, t, f) != face_of(tri, u, a & 3)) {
+      if (u >= m || tri.adj(u, a & 3) != 4 * t + f || face_of(tri, t, f) != face_of(tri, u, a & 3)) {
         ++r.asymmetric_adjacencies;
         problem(tet_str(tri, t) + " face " + std::to_string(f) +
                 ": neighbour does not point back through the same face");
@@ -105,16 +105,21 @@ ValidityReport check_delaunay(const PointSet& points, const Triangulation& tri,
   if (r.asymmetric_adjacencies) return r;  // the geometric checks below need sound topology
 
   // 2. Every point is a vertex, unless it repeats another point's coordinates.
+  // Which copy of a repeated point became the vertex depends on the insertion order, so
+  // coverage is tested per class of identical points.
   const std::vector<std::uint32_t> canon = canonical_point_ids(points);
+  std::vector<bool> class_used(n, false);
   for (std::size_t i = 0; i < n; ++i)
-    if (!used[canon[i]]) {
+    if (used[i]) class_used[canon[i]] = true;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!class_used[canon[i]]) {
       ++r.asymmetric_adjacencies;
       problem("point " + std::to_string(i) + " is not a vertex of the triangulation");
     }
 
   // 3. Orientation and local Delaunay property of every face (exact, perturbed).
   for (std::size_t t = 0; t < m; ++t) {
-    const std::uint32_t* v = &tri.v[4 * t];
+    const std::uint32_t* v = &tri.data[8 * t];
     const bool infinite = tri.is_infinite(t);
     if (infinite) {
       for (int i = 0; i < 4; ++i) r.hull_faces += v[i] == kInfiniteVertex;
@@ -126,11 +131,10 @@ ValidityReport check_delaunay(const PointSet& points, const Triangulation& tri,
       }
     }
     for (int f = 0; f < 4; ++f) {
-      const std::uint32_t q = tri.v[tri.adj[4 * t + f]];  // vertex opposite face f, in the neighbour
+      const std::uint32_t q = tri.opposite(tri.adj(t, f));  // vertex opposite face f, in the neighbour
       if (q == kInfiniteVertex) continue;                  // never in conflict with a finite tet
-      if (tri.adj[4 * t + f] >> 2 > t && is_tie(points, tri, t, f, q)) ++r.tie_faces;
-      if (tet_in_conflict(points.xyz.data(), tri.v.data(), tri.adj.data(), std::uint32_t(t),
-                          points.p(q))) {
+      if (tri.adj(t, f) >> 2 > t && is_tie(points, tri, t, f, q)) ++r.tie_faces;
+      if (tet_in_conflict(points.xyz.data(), tri.data.data(), std::uint32_t(t), points.p(q))) {
         ++r.non_delaunay_faces;
         problem(tet_str(tri, t) + " face " + std::to_string(f) + ": opposite vertex " +
                 std::to_string(q) + (infinite ? " breaks hull convexity" : " is inside its circumsphere"));

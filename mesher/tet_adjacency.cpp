@@ -26,7 +26,7 @@ void link_all_faces(Triangulation& tri) {
     for (int f = 0; f < 4; ++f) {
       FaceRef r{};
       for (int i = 0, k = 0; i < 4; ++i)
-        if (i != f) r.key[k++] = tri.v[4 * t + i];
+        if (i != f) r.key[k++] = tri.v(t, i);
       std::sort(r.key.begin(), r.key.end());
       r.face = std::uint32_t(4 * t + f);
       faces.push_back(r);
@@ -34,7 +34,7 @@ void link_all_faces(Triangulation& tri) {
   std::sort(faces.begin(), faces.end(), [](const FaceRef& a, const FaceRef& b) {
     return a.key != b.key ? a.key < b.key : a.face < b.face;
   });
-  tri.adj.assign(tri.v.size(), kNone);
+  
   for (std::size_t i = 0; i < faces.size();) {
     std::size_t j = i;
     while (j < faces.size() && faces[j].key == faces[i].key) ++j;
@@ -43,8 +43,8 @@ void link_all_faces(Triangulation& tri) {
                        std::to_string(faces[i].key[1]) + " " + std::to_string(faces[i].key[2]) +
                        ") is shared by " + std::to_string(j - i) + " tets");
     if (j - i == 2) {
-      tri.adj[faces[i].face] = faces[i + 1].face;
-      tri.adj[faces[i + 1].face] = faces[i].face;
+      tri.adj(faces[i].face >> 2, faces[i].face & 3) = faces[i + 1].face;
+      tri.adj(faces[i + 1].face >> 2, faces[i + 1].face & 3) = faces[i].face;
     }
     i = j;
   }
@@ -54,24 +54,28 @@ void link_all_faces(Triangulation& tri) {
 
 Triangulation triangulation_from_tets(const std::vector<std::uint32_t>& tets) {
   Triangulation tri;
-  tri.v = tets;
+  tri.data.assign(2 * tets.size(), kNone);
+  for (std::size_t t = 0; t < tets.size() / 4; ++t)
+    for (int i = 0; i < 4; ++i) tri.v(t, i) = tets[4 * t + i];
   link_all_faces(tri);
   // Close every hull face with an infinite tet, oriented like the kernel's: the finite tet
   // with the hull face's opposite vertex replaced by the infinite one, two others swapped.
   const std::size_t m = tri.num_tets();
   for (std::size_t t = 0; t < m; ++t)
     for (int f = 0; f < 4; ++f)
-      if (tri.adj[4 * t + f] == kNone) {
-        std::array<std::uint32_t, 4> v;
-        std::copy(tri.v.begin() + 4 * t, tri.v.begin() + 4 * t + 4, v.begin());
-        v[f] = kInfiniteVertex;
-        std::swap(v[(f + 1) % 4], v[(f + 2) % 4]);
-        tri.v.insert(tri.v.end(), v.begin(), v.end());
+      if (tri.adj(t, f) == kNone) {
+        std::array<std::uint32_t, 8> rec;
+        rec.fill(kNone);
+        for (int i = 0; i < 4; ++i) rec[i] = tri.v(t, i);
+        rec[f] = kInfiniteVertex;
+        std::swap(rec[(f + 1) % 4], rec[(f + 2) % 4]);
+        tri.data.insert(tri.data.end(), rec.begin(), rec.end());
       }
   link_all_faces(tri);
-  for (std::size_t i = 0; i < tri.adj.size(); ++i)
-    if (tri.adj[i] == kNone)
-      throw CheckError("tet " + std::to_string(i / 4) + " face " + std::to_string(i % 4) +
+  for (std::size_t t = 0; t < tri.num_tets(); ++t)
+    for (int f = 0; f < 4; ++f)
+      if (tri.adj(t, f) == kNone)
+        throw CheckError("tet " + std::to_string(t) + " face " + std::to_string(f) +
                        " has no neighbour: the tets do not form a closed triangulation");
   return tri;
 }

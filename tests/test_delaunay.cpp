@@ -162,8 +162,7 @@ TEST(Delaunay, ExtremeScales) {
 TEST(Delaunay, Deterministic) {
   const PointSet pts = generate_points(Distribution::spiral, 4000, 2);
   const auto a = run(pts), b = run(pts);
-  EXPECT_EQ(a.tri.v, b.tri.v);
-  EXPECT_EQ(a.tri.adj, b.tri.adj);
+  EXPECT_EQ(a.tri.data, b.tri.data);
   EXPECT_EQ(a.stats.orient_tests, b.stats.orient_tests);
   EXPECT_EQ(a.stats.conflicts, b.stats.conflicts);
 }
@@ -210,14 +209,14 @@ TEST(DelaunayCheck, DetectsCorruption) {
     Triangulation t = r.tri;
     for (std::size_t i = 0; i < t.num_tets(); ++i)
       if (!t.is_infinite(i)) {
-        std::swap(t.v[4 * i], t.v[4 * i + 1]);
+        std::swap(t.v(i, 0), t.v(i, 1));
         break;
       }
     EXPECT_FALSE(check_delaunay(pts, t).ok());
   }
   {  // break an adjacency
     Triangulation t = r.tri;
-    std::swap(t.adj[0], t.adj[1]);
+    std::swap(t.adj(0, 0), t.adj(0, 1));
     EXPECT_GT(check_delaunay(pts, t).asymmetric_adjacencies, 0u);
   }
   {  // move a point: the triangulation is no longer Delaunay (or no longer valid)
