@@ -1,0 +1,168 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// VTU writer: builds a vtkUnstructuredGrid over the mesh, has VTK's own XML writer encode it
+// (binary, zlib-compressed, 64-bit headers), and writes the bytes atomically. VTK types never
+// leave this file.
+#include "io/vtu_writer.h"
+
+#include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkCellType.h>
+#include <vtkCommand.h>
+#include <vtkDataCompressor.h>
+#include <vtkDoubleArray.h>
+#include <vtkExecutive.h>
+#include <vtkIdTypeArray.h>
+#include <vtkIntArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridWriter.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace kdmesh {
+
+namespace {
+
+/// zlib level 1. Measured on a 6M-tet, 1M-point mesh: level 1 writes in ~2 s (74 MB), VTK's
+/// default level 5 in ~7.5 s (72 MB), level 9 in ~90 s (71 MB): higher levels buy ~3%.
+constexpr int kZlibLevel = 1;
+
+/// Collects the text of every VTK error event raised by the objects it observes, so that
+/// failures become an OutputError instead of a line on VTK's output window.
+class ErrorCollector : public vtkCommand {
+ public:
+  static ErrorCollector* New() { return new ErrorCollector; }
+  void Execute(vtkObject*, unsigned long, void* call_data) override {
+    std::string msg = call_data ? static_cast<const char*>(call_data) : "unknown VTK error";
+    // VTK prefixes "<class> (<address>): " and appends newlines; keep the message proper.
+    if (const auto colon = msg.find("): "); colon != std::string::npos) msg.erase(0, colon + 3);
+    while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
+    if (!messages.empty()) messages += "; ";
+    messages += msg;
+  }
+  std::string messages;
+};
+
+/// A VTK array holding `a` (Float64 if it has reals, else Int32), checked to have `expected`
+/// entries; `kind` ("point" / "cell") names the association in errors.
+vtkSmartPointer<vtkDataArray> to_vtk(const DataArray& a, std::size_t expected, const char* kind) {
+  const std::size_t n = a.reals.empty() ? a.ints.size() : a.reals.size();
+  if (n != expected)
+    throw UsageError("write_vtu: " + std::string(kind) + " data array '" + a.name + "' has " +
+                     std::to_string(n) + " values, expected " + std::to_string(expected) +
+                     " (one per " + kind + ")");
+  if (!a.reals.empty()) {
+    auto arr = vtkSmartPointer<vtkDoubleArray>::New();
+    arr->SetName(a.name.c_str());
+    arr->SetNumberOfTuples(vtkIdType(n));
+    std::copy(a.reals.begin(), a.reals.end(), arr->GetPointer(0));
+    return arr;
+  }
+  auto arr = vtkSmartPointer<vtkIntArray>::New();
+  arr->SetName(a.name.c_str());
+  arr->SetNumberOfTuples(vtkIdType(n));
+  std::copy(a.ints.begin(), a.ints.end(), arr->GetPointer(0));
+  return arr;
+}
+
+/// The mesh as a vtkUnstructuredGrid (all data copied; the mesh is not referenced afterwards).
+vtkSmartPointer<vtkUnstructuredGrid> to_grid(const TetMesh& mesh) {
+  const std::size_t np = mesh.points.size();
+  const std::size_t nt = mesh.num_tets();
+  if (mesh.tets.size() % 4 != 0)
+    throw UsageError("write_vtu: tets array length " + std::to_string(mesh.tets.size()) +
+                     " is not a multiple of 4");
+  if (const auto bad = std::find_if(mesh.tets.begin(), mesh.tets.end(),
+                                    [np](std::uint32_t v) { return v >= np; });
+      bad != mesh.tets.end())
+    throw UsageError("write_vtu: tet " + std::to_string((bad - mesh.tets.begin()) / 4) +
+                     " references point " + std::to_string(*bad) + ", but the mesh has " +
+                     std::to_string(np) + " points");
+
+  // Data arrays first: a size mismatch should fail before any large allocation.
+  std::vector<vtkSmartPointer<vtkDataArray>> point_arrays, cell_arrays;
+  for (const DataArray& a : mesh.point_data) point_arrays.push_back(to_vtk(a, np, "point"));
+  for (const DataArray& a : mesh.cell_data) cell_arrays.push_back(to_vtk(a, nt, "cell"));
+
+  vtkNew<vtkDoubleArray> coords;
+  coords->SetNumberOfComponents(3);
+  coords->SetNumberOfTuples(vtkIdType(np));
+  std::copy(mesh.points.xyz.begin(), mesh.points.xyz.end(), coords->GetPointer(0));
+  vtkNew<vtkPoints> points;
+  points->SetData(coords);
+
+  // Cells in VTK's native offsets + connectivity form: two flat arrays, no per-cell calls.
+  vtkNew<vtkIdTypeArray> offsets, connectivity;
+  offsets->SetNumberOfValues(vtkIdType(nt + 1));
+  connectivity->SetNumberOfValues(vtkIdType(4 * nt));
+  vtkIdType* off = offsets->GetPointer(0);
+  for (std::size_t t = 0; t <= nt; ++t) off[t] = vtkIdType(4 * t);
+  std::copy(mesh.tets.begin(), mesh.tets.end(), connectivity->GetPointer(0));
+  vtkNew<vtkCellArray> cells;
+  cells->SetData(offsets, connectivity);
+
+  auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  grid->SetPoints(points);
+  grid->SetCells(VTK_TETRA, cells);
+  for (const auto& a : point_arrays) grid->GetPointData()->AddArray(a);
+  for (const auto& a : cell_arrays) grid->GetCellData()->AddArray(a);
+  return grid;
+}
+
+}  // namespace
+
+void write_vtu(const TetMesh& mesh, const std::string& path) {
+  const vtkSmartPointer<vtkUnstructuredGrid> grid = to_grid(mesh);
+
+  // VTK writes into memory and this function writes the bytes to the file itself: VTK 9.1's
+  // own failure path for a write error part-way through (disk full) deletes an array it never
+  // allocated (vtkXMLUnstructuredDataWriter::WriteAPiece -> DeletePositionArrays), which is a
+  // crash or heap corruption. An in-memory stream cannot fail that way.
+  vtkNew<ErrorCollector> errors;
+  vtkNew<vtkXMLUnstructuredGridWriter> writer;
+  writer->AddObserver(vtkCommand::ErrorEvent, errors);
+  writer->WriteToOutputStringOn();
+  writer->SetInputData(grid);
+  writer->SetDataModeToBinary();
+  // The writer creates its own vtkZLibDataCompressor (that class lives in VTK::IOCore, which
+  // the build does not link directly); its errors are collected as well.
+  writer->SetCompressorTypeToZLib();
+  writer->SetCompressionLevel(kZlibLevel);
+  writer->GetCompressor()->AddObserver(vtkCommand::ErrorEvent, errors);
+  writer->SetHeaderTypeToUInt64();
+  writer->SetIdTypeToInt64();
+
+  // The pipeline executive reports any writer failure once more, with a request dump:
+  // observed only to keep it off the console.
+  vtkNew<ErrorCollector> pipeline_errors;
+  writer->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, pipeline_errors);
+
+  const int ok = writer->Write();
+  if (!ok || writer->GetErrorCode() != 0 || !errors->messages.empty())
+    throw OutputError(path, "VTK could not encode the mesh: " +
+                                (errors->messages.empty()
+                                     ? "VTK error code " + std::to_string(writer->GetErrorCode())
+                                     : errors->messages));
+  const std::string bytes = writer->GetOutputString();
+
+  AtomicFile file(path);
+  std::FILE* f = std::fopen(file.temp_path().c_str(), "wb");
+  if (!f) throw OutputError(path, std::string("cannot create: ") + std::strerror(errno));
+  int error = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size() ? 0 : errno;
+  if (std::fclose(f) != 0 && error == 0) error = errno;
+  if (error != 0) throw OutputError(path, std::string("write failed: ") + std::strerror(error));
+  file.commit();
+}
+
+}  // namespace kdmesh

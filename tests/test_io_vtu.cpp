@@ -1,0 +1,264 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// VTU writer: what VTK's own reader gets back, the on-disk encoding, and failure behaviour.
+#include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkCellType.h>
+#include <vtkDataArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkIdList.h>
+#include <vtkIntArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
+#include <bit>
+#include <csignal>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "core/tet_mesh.h"
+#include "io/vtu_writer.h"
+
+namespace kdmesh {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// A fresh path under KDMESH_TEST_TMP, unique per test and call (reruns overwrite, so the
+/// directory does not grow; the files stay for inspection after a failure).
+std::string scratch(const std::string& ext) {
+  static std::string current_test;
+  static int counter = 0;
+  const fs::path dir = fs::path(KDMESH_TEST_TMP) / "io_vtu";
+  fs::create_directories(dir);
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const std::string test = std::string(info->test_suite_name()) + "." + info->name();
+  if (test != current_test) {
+    current_test = test;
+    counter = 0;
+  }
+  const fs::path p = dir / (test + "-" + std::to_string(counter++) + ext);
+  fs::remove_all(p);
+  return p.string();
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+/// Files in `path`'s directory whose names start with `path`'s file name followed by ".tmp".
+std::vector<std::string> leftover_temps(const std::string& path) {
+  std::vector<std::string> found;
+  const fs::path p(path);
+  if (!fs::exists(p.parent_path())) return found;
+  const std::string prefix = p.filename().string() + ".tmp";
+  for (const auto& entry : fs::directory_iterator(p.parent_path()))
+    if (entry.path().filename().string().rfind(prefix, 0) == 0)
+      found.push_back(entry.path().string());
+  return found;
+}
+
+std::uint64_t bits(double d) { return std::bit_cast<std::uint64_t>(d); }
+
+/// Five points, two positively oriented tets sharing a face, and data arrays of both kinds.
+TetMesh small_mesh() {
+  TetMesh m;
+  m.points.push_back(0, 0, 0);
+  m.points.push_back(1, 0, 0);
+  m.points.push_back(0, 1, 0);
+  m.points.push_back(0, 0, 1);
+  m.points.push_back(1.0 / 3.0, 1e-300, -1.25);
+  m.tets = {0, 1, 2, 3, 0, 2, 1, 4};
+  m.point_data.push_back({"id", {10, -20, 30, std::numeric_limits<std::int32_t>::min(), 50}, {}});
+  m.point_data.push_back(
+      {"height", {}, {0.1 + 0.2, -0.0, 1e300, std::numeric_limits<double>::denorm_min(), 7}});
+  m.cell_data.push_back({"region", {1, std::numeric_limits<std::int32_t>::max()}, {}});
+  m.cell_data.push_back({"quality", {}, {1.0 / 3.0, 2.0 / 3.0}});
+  return m;
+}
+
+/// A random mesh with `n` points and about 5n tets (random ids: enough to exercise sizes).
+TetMesh random_mesh(std::size_t n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  TetMesh m;
+  m.points.xyz.resize(3 * n);
+  for (double& x : m.points.xyz) x = u(rng);
+  m.tets.resize(4 * 5 * n);
+  for (std::uint32_t& v : m.tets) v = std::uint32_t(rng() % n);
+  return m;
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> read_back(const std::string& path) {
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  EXPECT_EQ(reader->GetErrorCode(), 0u);
+  return reader->GetOutput();
+}
+
+/// `got` holds exactly `want` (same type, name, values bit for bit).
+void expect_array(vtkDataArray* got, const DataArray& want) {
+  ASSERT_NE(got, nullptr) << "array '" << want.name << "' missing";
+  EXPECT_EQ(got->GetNumberOfComponents(), 1);
+  if (!want.reals.empty()) {
+    auto* d = vtkDoubleArray::SafeDownCast(got);
+    ASSERT_NE(d, nullptr) << want.name << " is " << got->GetClassName()
+                          << ", expected vtkDoubleArray";
+    ASSERT_EQ(std::size_t(d->GetNumberOfTuples()), want.reals.size());
+    for (std::size_t i = 0; i < want.reals.size(); ++i)
+      EXPECT_EQ(bits(d->GetValue(vtkIdType(i))), bits(want.reals[i]))
+          << want.name << "[" << i << "]";
+  } else {
+    auto* a = vtkIntArray::SafeDownCast(got);
+    ASSERT_NE(a, nullptr) << want.name << " is " << got->GetClassName() << ", expected vtkIntArray";
+    ASSERT_EQ(std::size_t(a->GetNumberOfTuples()), want.ints.size());
+    for (std::size_t i = 0; i < want.ints.size(); ++i)
+      EXPECT_EQ(a->GetValue(vtkIdType(i)), want.ints[i]) << want.name << "[" << i << "]";
+  }
+}
+
+/// What VTK reads from `path` equals `m`: points, tets (as VTK_TETRA) and every data array.
+void expect_same_mesh(const std::string& path, const TetMesh& m) {
+  const auto grid = read_back(path);
+  ASSERT_NE(grid, nullptr);
+  ASSERT_EQ(std::size_t(grid->GetNumberOfPoints()), m.points.size());
+  for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); ++i) {
+    double p[3];
+    grid->GetPoint(i, p);
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(bits(p[k]), bits(m.points.xyz[3 * i + k])) << "point " << i;
+  }
+  EXPECT_EQ(grid->GetPoints()->GetDataType(), VTK_DOUBLE);
+  ASSERT_EQ(std::size_t(grid->GetNumberOfCells()), m.num_tets());
+  vtkNew<vtkIdList> ids;
+  for (vtkIdType t = 0; t < grid->GetNumberOfCells(); ++t) {
+    EXPECT_EQ(grid->GetCellType(t), VTK_TETRA);
+    grid->GetCellPoints(t, ids);
+    ASSERT_EQ(ids->GetNumberOfIds(), 4);
+    for (vtkIdType k = 0; k < 4; ++k)
+      EXPECT_EQ(ids->GetId(k), vtkIdType(m.tets[4 * t + k])) << "tet " << t;
+  }
+  EXPECT_EQ(std::size_t(grid->GetPointData()->GetNumberOfArrays()), m.point_data.size());
+  EXPECT_EQ(std::size_t(grid->GetCellData()->GetNumberOfArrays()), m.cell_data.size());
+  for (const DataArray& a : m.point_data)
+    expect_array(grid->GetPointData()->GetArray(a.name.c_str()), a);
+  for (const DataArray& a : m.cell_data)
+    expect_array(grid->GetCellData()->GetArray(a.name.c_str()), a);
+}
+
+TEST(Vtu, SmallMeshReadsBackExactly) {
+  const TetMesh m = small_mesh();
+  const std::string path = scratch(".vtu");
+  write_vtu(m, path);
+  expect_same_mesh(path, m);
+  EXPECT_TRUE(leftover_temps(path).empty());
+}
+
+TEST(Vtu, RandomMeshReadsBackExactly) {
+  TetMesh m = random_mesh(20000, 3);
+  m.cell_data.push_back({"tet", {}, {}});
+  for (std::size_t t = 0; t < m.num_tets(); ++t) m.cell_data.back().ints.push_back(std::int32_t(t));
+  const std::string path = scratch(".vtu");
+  write_vtu(m, path);
+  expect_same_mesh(path, m);
+}
+
+TEST(Vtu, EmptyMesh) {
+  const std::string path = scratch(".vtu");
+  write_vtu(TetMesh{}, path);
+  expect_same_mesh(path, TetMesh{});
+}
+
+TEST(Vtu, FileIsBinaryZlibWith64BitHeaders) {
+  const std::string path = scratch(".vtu");
+  write_vtu(small_mesh(), path);
+  const std::string text = slurp(path);
+  const std::string head = text.substr(0, text.find("<Piece"));
+  EXPECT_NE(head.find("compressor=\"vtkZLibDataCompressor\""), std::string::npos) << head;
+  EXPECT_NE(head.find("header_type=\"UInt64\""), std::string::npos) << head;
+  EXPECT_TRUE(text.find("format=\"binary\"") != std::string::npos ||
+              text.find("format=\"appended\"") != std::string::npos);
+  EXPECT_EQ(text.find("format=\"ascii\""), std::string::npos);
+}
+
+TEST(Vtu, MissingDirectoryThrowsOutputErrorAndLeavesNothing) {
+  const std::string dir = scratch(".d");  // never created
+  const std::string path = dir + "/mesh.vtu";
+  try {
+    write_vtu(small_mesh(), path);
+    ADD_FAILURE() << "no OutputError";
+  } catch (const OutputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_EQ(e.code(), ExitCode::output);
+  }
+  EXPECT_FALSE(fs::exists(dir));
+}
+
+TEST(Vtu, FailedWriteKeepsExistingFileAndLeavesNoTemp) {
+  const std::string path = scratch(".vtu");
+  std::ofstream(path) << "previous content";
+  // A file-size limit makes the write fail part-way (as a full disk would), even for root.
+  const TetMesh m = random_mesh(20000, 5);
+  rlimit old{};
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &old), 0);
+  rlimit small = old;
+  small.rlim_cur = 64 * 1024;
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
+  bool threw = false;
+  std::string what;
+  try {
+    write_vtu(m, path);
+  } catch (const OutputError& e) {
+    threw = true;
+    what = e.what();
+  }
+  ::setrlimit(RLIMIT_FSIZE, &old);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_TRUE(threw);
+  EXPECT_NE(what.find(path), std::string::npos) << what;
+  EXPECT_EQ(slurp(path), "previous content");
+  EXPECT_TRUE(leftover_temps(path).empty());
+}
+
+TEST(Vtu, ArraySizeMismatchIsUsageError) {
+  const std::string path = scratch(".vtu");
+  std::ofstream(path) << "previous content";
+  auto expect_usage = [&](const TetMesh& m, const std::string& needle) {
+    try {
+      write_vtu(m, path);
+      ADD_FAILURE() << "no UsageError";
+    } catch (const UsageError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(slurp(path), "previous content");
+    EXPECT_TRUE(leftover_temps(path).empty());
+  };
+  TetMesh m = small_mesh();
+  m.point_data[1].reals.pop_back();
+  expect_usage(m, "'height'");
+  m = small_mesh();
+  m.cell_data[0].ints.push_back(3);
+  expect_usage(m, "'region'");
+  m = small_mesh();
+  m.tets[6] = 5;  // only points 0..4 exist
+  expect_usage(m, "references point 5");
+}
+
+}  // namespace
+}  // namespace kdmesh
