@@ -233,7 +233,7 @@ int run_delaunay(const Options& o) {
 void add_delaunay_command(CLI::App& app, Runner& run) {
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("delaunay", "Delaunay tetrahedralization of a point set (.xyz, .node, .ply)");
-  cmd->add_option("input", o->input, "Point file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("input", o->input, "Point file")->required();
   std::vector<std::string> orders = order_kind_names();
   orders.push_back("cgal");
   cmd->add_option("--order", o->order, "Insertion order (cgal: CGAL's own, with --kernel cgal)")

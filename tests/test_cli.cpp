@@ -1,0 +1,167 @@
+// The kdmesh executable end to end: exit codes, messages, JSON, outputs, and that failures
+// write nothing.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Run {
+  int code;
+  std::string out, err;
+};
+
+fs::path tmpdir() {
+  static const fs::path d = [] {
+    fs::path p = fs::path(KDMESH_TEST_TMP) / "cli";
+    fs::create_directories(p);
+    return p;
+  }();
+  return d;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+Run kdmesh(const std::string& args) {
+  static int counter = 0;
+  const fs::path out = tmpdir() / ("stdout-" + std::to_string(counter));
+  const fs::path err = tmpdir() / ("stderr-" + std::to_string(counter++));
+  const std::string cmd = std::string(KDMESH_EXE) + " " + args + " >" + out.string() + " 2>" + err.string();
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+fs::path write_file(const std::string& name, const std::string& text) {
+  const fs::path p = tmpdir() / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+bool has_temp_leftovers(const fs::path& dir) {
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().filename().string().find(".tmp-") != std::string::npos) return true;
+  return false;
+}
+
+TEST(Cli, HelpForEverySubcommand) {
+  EXPECT_EQ(kdmesh("--help").code, 0);
+  for (const char* sub : {"points", "delaunay"}) {
+    const Run r = kdmesh(std::string(sub) + " --help");
+    EXPECT_EQ(r.code, 0) << sub;
+    EXPECT_NE(r.out.find("--json"), std::string::npos) << sub;
+  }
+  EXPECT_EQ(kdmesh("no-such-command").code, 2);
+}
+
+TEST(Cli, PointsAreDeterministicForASeed) {
+  const fs::path a = tmpdir() / "a.xyz", b = tmpdir() / "b.xyz", c = tmpdir() / "c.xyz";
+  ASSERT_EQ(kdmesh("points --dist spiral -n 500 --seed 4 -q -o " + a.string()).code, 0);
+  ASSERT_EQ(kdmesh("points --dist spiral -n 500 --seed 4 -q -o " + b.string()).code, 0);
+  ASSERT_EQ(kdmesh("points --dist spiral -n 500 --seed 5 -q -o " + c.string()).code, 0);
+  EXPECT_EQ(slurp(a), slurp(b));
+  EXPECT_NE(slurp(a), slurp(c));
+  EXPECT_EQ(kdmesh("points --dist nowhere -n 5 -o " + a.string()).code, 2);
+}
+
+TEST(Cli, DelaunayCheckJsonAndVtu) {
+  const fs::path pts = tmpdir() / "axes.xyz", vtu = tmpdir() / "axes.vtu";
+  ASSERT_EQ(kdmesh("points --dist axes -n 3000 --seed 2 -q -o " + pts.string()).code, 0);
+  fs::remove(vtu);
+  const Run r = kdmesh("delaunay " + pts.string() + " --order kd-bfs --check --json -o " + vtu.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);  // stdout is exactly one JSON document
+  EXPECT_EQ(j["points"], 3000);
+  EXPECT_TRUE(j["check"]["pass"].get<bool>());
+  EXPECT_TRUE(j["check"]["validity"]["pass"].get<bool>());
+  EXPECT_TRUE(j["check"]["tetgen"]["identical"].get<bool>());
+  EXPECT_TRUE(j["check"]["cgal"]["identical"].get<bool>());
+  EXPECT_EQ(j["tets"], j["check"]["tetgen"]["reference_tets"]);
+  EXPECT_GT(j["counts"]["orient_tests_per_point"].get<double>(), 1.0);
+  EXPECT_GT(j["counts"]["conflicts_per_point"].get<double>(), 1.0);
+  for (const char* stage : {"read", "order", "delaunay", "check", "write", "total"})
+    EXPECT_TRUE(j["seconds"].contains(stage)) << stage;
+  const std::string xml = slurp(vtu);
+  EXPECT_NE(xml.find("UnstructuredGrid"), std::string::npos);
+  EXPECT_NE(xml.find("insertion_rank"), std::string::npos);
+  EXPECT_NE(xml.find("kd_level"), std::string::npos);
+  EXPECT_NE(xml.find("vtkZLibDataCompressor"), std::string::npos);
+}
+
+TEST(Cli, CgalKernelAndOrders) {
+  const fs::path pts = tmpdir() / "disk.xyz";
+  ASSERT_EQ(kdmesh("points --dist disk -n 2000 -q -o " + pts.string()).code, 0);
+  const Run own = kdmesh("delaunay " + pts.string() + " --kernel cgal --order cgal --check --json -q");
+  ASSERT_EQ(own.code, 0) << own.err;
+  EXPECT_TRUE(nlohmann::json::parse(own.out)["check"]["kdmesh"]["identical"].get<bool>());
+  EXPECT_EQ(kdmesh("delaunay " + pts.string() + " --kernel cgal --order brio -q").code, 0);
+  const Run bad = kdmesh("delaunay " + pts.string() + " --order cgal -q");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("--kernel cgal"), std::string::npos) << bad.err;
+}
+
+TEST(Cli, LatticeCheckPassesWithTies) {
+  std::string text;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j)
+      for (int k = 0; k < 6; ++k) text += std::to_string(i) + " " + std::to_string(j) + " " + std::to_string(k) + "\n";
+  const fs::path p = write_file("lattice.xyz", text);
+  const Run r = kdmesh("delaunay " + p.string() + " --check --json -q");
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["check"]["general_position"].get<bool>());
+  EXPECT_GT(j["check"]["validity"]["tie_faces"].get<int>(), 0);
+  EXPECT_NEAR(j["check"]["validity"]["volume"].get<double>(), 125.0, 1e-9);
+}
+
+TEST(Cli, DuplicatesAreReportedByIndex) {
+  const fs::path p = write_file("dups.xyz", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0\n1 1 1\n0 0 1\n");
+  const Run r = kdmesh("delaunay " + p.string() + " --order input --check");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("point 4 repeats point 1"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("point 6 repeats point 3"), std::string::npos) << r.out;
+}
+
+TEST(Cli, ErrorsHaveTheirExitCodesAndWriteNothing) {
+  const fs::path out = tmpdir() / "never.vtu";
+  fs::remove(out);
+  // all coplanar -> 4
+  const fs::path flat = write_file("flat.xyz", "0 0 0\n1 0 0\n0 1 0\n1 1 0\n2 3 0\n");
+  Run r = kdmesh("delaunay " + flat.string() + " -o " + out.string());
+  EXPECT_EQ(r.code, 4);
+  EXPECT_NE(r.err.find("coplanar"), std::string::npos) << r.err;
+  // empty -> 4
+  r = kdmesh("delaunay " + write_file("empty.xyz", "# nothing\n").string() + " -o " + out.string());
+  EXPECT_EQ(r.code, 4);
+  EXPECT_NE(r.err.find("empty"), std::string::npos) << r.err;
+  // malformed -> 3, names file and line
+  r = kdmesh("delaunay " + write_file("bad.xyz", "0 0 0\n1 0 0\n0 1 oops\n").string() + " -o " + out.string());
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("bad.xyz:3"), std::string::npos) << r.err;
+  // missing -> 3
+  r = kdmesh("delaunay " + (tmpdir() / "missing.xyz").string());
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("missing.xyz"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  // unwritable output -> 6, no temp file left behind
+  const fs::path pts = tmpdir() / "small.xyz";
+  ASSERT_EQ(kdmesh("points -n 100 -q -o " + pts.string()).code, 0);
+  r = kdmesh("delaunay " + pts.string() + " -q -o " + (tmpdir() / "no-such-dir" / "x.vtu").string());
+  EXPECT_EQ(r.code, 6) << r.err;
+  EXPECT_FALSE(has_temp_leftovers(tmpdir()));
+}
+
+}  // namespace
