@@ -3,6 +3,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -15,14 +16,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Run {
+struct CliResult {
   int code;
   std::string out, err;
 };
 
 fs::path tmpdir() {
   static const fs::path d = [] {
-    fs::path p = fs::path(KDMESH_TEST_TMP) / "cli";
+    fs::path p = fs::path(KDMESH_TEST_TMP) / ("cli-" + std::to_string(::getpid()));
     fs::create_directories(p);
     return p;
   }();
@@ -36,10 +37,12 @@ std::string slurp(const fs::path& p) {
   return s.str();
 }
 
-Run kdmesh(const std::string& args) {
+CliResult kdmesh(const std::string& args) {
   static int counter = 0;
-  const fs::path out = tmpdir() / ("stdout-" + std::to_string(counter));
-  const fs::path err = tmpdir() / ("stderr-" + std::to_string(counter++));
+  // ctest runs every test case as its own process, in parallel: names must be unique per process.
+  const std::string tag = std::to_string(::getpid()) + "-" + std::to_string(counter++);
+  const fs::path out = tmpdir() / ("stdout-" + tag);
+  const fs::path err = tmpdir() / ("stderr-" + tag);
   const std::string cmd = std::string(KDMESH_EXE) + " " + args + " >" + out.string() + " 2>" + err.string();
   const int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
@@ -60,7 +63,7 @@ bool has_temp_leftovers(const fs::path& dir) {
 TEST(Cli, HelpForEverySubcommand) {
   EXPECT_EQ(kdmesh("--help").code, 0);
   for (const char* sub : {"points", "delaunay"}) {
-    const Run r = kdmesh(std::string(sub) + " --help");
+    const CliResult r = kdmesh(std::string(sub) + " --help");
     EXPECT_EQ(r.code, 0) << sub;
     EXPECT_NE(r.out.find("--json"), std::string::npos) << sub;
   }
@@ -81,7 +84,7 @@ TEST(Cli, DelaunayCheckJsonAndVtu) {
   const fs::path pts = tmpdir() / "axes.xyz", vtu = tmpdir() / "axes.vtu";
   ASSERT_EQ(kdmesh("points --dist axes -n 3000 --seed 2 -q -o " + pts.string()).code, 0);
   fs::remove(vtu);
-  const Run r = kdmesh("delaunay " + pts.string() + " --order kd-bfs --check --json -o " + vtu.string());
+  const CliResult r = kdmesh("delaunay " + pts.string() + " --order kd-bfs --check --json -o " + vtu.string());
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);  // stdout is exactly one JSON document
   EXPECT_EQ(j["points"], 3000);
@@ -104,11 +107,11 @@ TEST(Cli, DelaunayCheckJsonAndVtu) {
 TEST(Cli, CgalKernelAndOrders) {
   const fs::path pts = tmpdir() / "disk.xyz";
   ASSERT_EQ(kdmesh("points --dist disk -n 2000 -q -o " + pts.string()).code, 0);
-  const Run own = kdmesh("delaunay " + pts.string() + " --kernel cgal --order cgal --check --json -q");
+  const CliResult own = kdmesh("delaunay " + pts.string() + " --kernel cgal --order cgal --check --json -q");
   ASSERT_EQ(own.code, 0) << own.err;
   EXPECT_TRUE(nlohmann::json::parse(own.out)["check"]["kdmesh"]["identical"].get<bool>());
   EXPECT_EQ(kdmesh("delaunay " + pts.string() + " --kernel cgal --order brio -q").code, 0);
-  const Run bad = kdmesh("delaunay " + pts.string() + " --order cgal -q");
+  const CliResult bad = kdmesh("delaunay " + pts.string() + " --order cgal -q");
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.err.find("--kernel cgal"), std::string::npos) << bad.err;
 }
@@ -119,7 +122,7 @@ TEST(Cli, LatticeCheckPassesWithTies) {
     for (int j = 0; j < 6; ++j)
       for (int k = 0; k < 6; ++k) text += std::to_string(i) + " " + std::to_string(j) + " " + std::to_string(k) + "\n";
   const fs::path p = write_file("lattice.xyz", text);
-  const Run r = kdmesh("delaunay " + p.string() + " --check --json -q");
+  const CliResult r = kdmesh("delaunay " + p.string() + " --check --json -q");
   ASSERT_EQ(r.code, 0) << r.out << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_FALSE(j["check"]["general_position"].get<bool>());
@@ -129,7 +132,7 @@ TEST(Cli, LatticeCheckPassesWithTies) {
 
 TEST(Cli, DuplicatesAreReportedByIndex) {
   const fs::path p = write_file("dups.xyz", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0\n1 1 1\n0 0 1\n");
-  const Run r = kdmesh("delaunay " + p.string() + " --order input --check");
+  const CliResult r = kdmesh("delaunay " + p.string() + " --order input --check");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("point 4 repeats point 1"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("point 6 repeats point 3"), std::string::npos) << r.out;
@@ -140,7 +143,7 @@ TEST(Cli, ErrorsHaveTheirExitCodesAndWriteNothing) {
   fs::remove(out);
   // all coplanar -> 4
   const fs::path flat = write_file("flat.xyz", "0 0 0\n1 0 0\n0 1 0\n1 1 0\n2 3 0\n");
-  Run r = kdmesh("delaunay " + flat.string() + " -o " + out.string());
+  CliResult r = kdmesh("delaunay " + flat.string() + " -o " + out.string());
   EXPECT_EQ(r.code, 4);
   EXPECT_NE(r.err.find("coplanar"), std::string::npos) << r.err;
   // empty -> 4
