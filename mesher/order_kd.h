@@ -1,0 +1,13 @@
+// kdmesh — the kd-tree breadth-first orders (private to mesher/; public entry: make_order).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include "core/ordering.h"
+#include "core/point_set.h"
+
+namespace kdmesh::detail {
+
+/// The kd-tree breadth-first order of the paper (cut-longest-edge rule), or with
+/// `alternate` the x/y/z-alternating rule. Defined in order_kd.cpp.
+Ordering make_kd_order(const PointSet& points, bool alternate);
+
+}  // namespace kdmesh::detail
