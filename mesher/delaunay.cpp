@@ -86,8 +86,10 @@ struct BoundaryFace {
 
 class Kernel {
  public:
-  Kernel(const PointSet& points, DelaunayStats& stats)
-      : xyz_(points.xyz.data()), n_(points.size()), stats_(stats), rng_(0x6b646d657368ULL) {
+  /// `points` are in the kernel's numbering (see delaunay()); `ids` maps it back to the
+  /// caller's point ids for reports.
+  Kernel(const PointSet& points, const std::uint32_t* ids, DelaunayStats& stats)
+      : xyz_(points.xyz.data()), ids_(ids), n_(points.size()), stats_(stats), rng_(0x6b646d657368ULL) {
     v2t_.assign(n_, kNone);
     // ~6.7 tets per point for uniform points; reserving avoids the 2x spike of a late
     // reallocation (the vector still grows if a distribution needs more).
@@ -137,8 +139,8 @@ class Kernel {
         const std::uint32_t w = vert(base, i);
         const double* q = P(w);
         if (q[0] == p[0] && q[1] == p[1] && q[2] == p[2]) {
-          stats_.duplicates.push_back(pid);
-          stats_.duplicate_of.push_back(w);
+          stats_.duplicates.push_back(ids_[pid]);
+          stats_.duplicate_of.push_back(ids_[w]);
           v2t_[pid] = kAliasBit | w;
           return;
         }
@@ -149,9 +151,12 @@ class Kernel {
     ++stats_.inserted;
   }
 
-  /// Moves the (compacted) records out.
+  /// Moves the (compacted) records out, with vertices renumbered to the caller's ids.
   Triangulation release() {
     compact();
+    for (std::size_t t = 0; t < T_.size(); t += 8)
+      for (std::size_t i = t; i < t + 4; ++i)
+        if (T_[i] != kInf) T_[i] = ids_[T_[i]];
     Triangulation tri;
     tri.data = std::move(T_);
     return tri;
@@ -320,6 +325,7 @@ class Kernel {
   }
 
   const double* xyz_;
+  const std::uint32_t* ids_;
   std::size_t n_;
   DelaunayStats& stats_;
   Rng rng_;
@@ -370,48 +376,59 @@ DelaunayResult delaunay(const PointSet& points, const Ordering& order,
 
   DelaunayResult result;
   DelaunayStats& st = result.stats;
-  auto P = [&](std::uint32_t id) { return points.p(id); };
+
+  // The kernel numbers vertex k after its rank in the order and keeps its own copy of the
+  // coordinates in that order: consecutive insertions (neighbouring kd cells, or a curve's
+  // neighbours) then touch nearby memory, as CGAL's vertices allocated in insertion order do.
+  const std::vector<std::uint32_t>& ids = order.order;
+  PointSet ranked;
+  ranked.xyz.resize(3 * n);
+  std::vector<std::uint32_t> rank_of(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    std::memcpy(&ranked.xyz[3 * k], points.p(ids[k]), 3 * sizeof(double));
+    rank_of[ids[k]] = std::uint32_t(k);
+  }
+  auto P = [&](std::size_t rank) { return ranked.p(std::uint32_t(rank)); };
 
   // Find 4 affinely independent points in insertion order; points skipped on the way are
   // inserted right after the first tet (they may be duplicates, collinear or coplanar).
-  std::vector<std::size_t> deferred;
-  const std::uint32_t a = order.order[0];
+  std::vector<std::uint32_t> deferred;
   std::size_t k = 1;
-  for (; k < n && same_point(P(order.order[k]), P(a)); ++k) {
-    st.duplicates.push_back(order.order[k]);
-    st.duplicate_of.push_back(a);
+  for (; k < n && same_point(P(k), P(0)); ++k) {
+    st.duplicates.push_back(ids[k]);
+    st.duplicate_of.push_back(ids[0]);
   }
   if (k == n)
     throw GeometryError("delaunay: all " + std::to_string(n) +
                         " points are identical; no tetrahedralization exists");
-  const std::uint32_t b = order.order[k++];
-  for (; k < n && pred::collinear(P(a), P(b), P(order.order[k])); ++k) deferred.push_back(k);
+  const std::uint32_t b = std::uint32_t(k++);
+  for (; k < n && pred::collinear(P(0), P(b), P(k)); ++k) deferred.push_back(std::uint32_t(k));
   if (k == n)
     throw GeometryError("delaunay: all " + std::to_string(n) +
                         " points are collinear; no tetrahedralization exists");
-  const std::uint32_t c = order.order[k++];
-  for (; k < n && pred::orient3d(P(a), P(b), P(c), P(order.order[k])) == 0; ++k)
-    deferred.push_back(k);
+  const std::uint32_t c = std::uint32_t(k++);
+  for (; k < n && pred::orient3d(P(0), P(b), P(c), P(k)) == 0; ++k)
+    deferred.push_back(std::uint32_t(k));
   if (k == n)
     throw GeometryError("delaunay: all " + std::to_string(n) +
                         " points are coplanar; no tetrahedralization exists");
-  const std::uint32_t d = order.order[k++];
+  const std::uint32_t d = std::uint32_t(k++);
 
-  Kernel kernel(points, st);
-  kernel.init(a, b, c, d);
+  Kernel kernel(ranked, ids.data(), st);
+  kernel.init(0, b, c, d);
   std::size_t done = 0;
   auto report = [&] {
     if (options.progress && (++done & 0xFFFF) == 0) options.progress(double(done) / double(n));
   };
   auto hint_of = [&](std::size_t rank) {
-    return order.hint[rank] == kNoHint ? kNone : order.hint[rank];
+    return order.hint[rank] == kNoHint ? kNone : rank_of[order.hint[rank]];
   };
-  for (std::size_t r : deferred) {
-    kernel.insert(order.order[r], hint_of(r));
+  for (std::uint32_t r : deferred) {
+    kernel.insert(r, hint_of(r));
     report();
   }
   for (; k < n; ++k) {
-    kernel.insert(order.order[k], hint_of(k));
+    kernel.insert(std::uint32_t(k), hint_of(k));
     report();
   }
   result.tri = kernel.release();
