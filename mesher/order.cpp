@@ -41,6 +41,7 @@ struct KindName {
 
 constexpr KindName kKinds[] = {
     {OrderKind::kd_bfs, "kd-bfs"}, {OrderKind::kd_bfs_alt, "kd-bfs-alt"},
+    {OrderKind::kd_local, "kd-local"},
     {OrderKind::hilbert, "hilbert"}, {OrderKind::brio, "brio"},
     {OrderKind::random, "random"},   {OrderKind::input, "input"},
 };
@@ -106,6 +107,10 @@ Ordering make_order(const PointSet& points, const OrderOptions& options) {
       break;
     case OrderKind::kd_bfs_alt:
       out = detail::make_kd_order(points, true);
+      break;
+    case OrderKind::kd_local:
+      if (options.local_points == 0) throw UsageError("kd-local subtree size must be positive");
+      out = detail::make_kd_local_order(detail::make_kd_order(points, false), options.local_points);
       break;
     case OrderKind::hilbert: {
       out.order = identity(n);

@@ -10,4 +10,9 @@ namespace kdmesh::detail {
 /// `alternate` the x/y/z-alternating rule. Defined in order_kd.cpp.
 Ordering make_kd_order(const PointSet& points, bool alternate);
 
+/// Reorders a kd-bfs ordering (with its levels and parent hints) so that, below the first
+/// level whose subtrees hold at most `subtree_points` points, each subtree is inserted as one
+/// block (breadth-first inside it), subtrees left to right. Defined in order_kd_local.cpp.
+Ordering make_kd_local_order(Ordering bfs, std::size_t subtree_points);
+
 }  // namespace kdmesh::detail
