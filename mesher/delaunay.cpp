@@ -36,6 +36,14 @@ constexpr std::size_t kMaxPoints = std::size_t(1) << 27;
 
 enum : std::uint8_t { kUnvisited = 0, kInCavity = 1, kOutside = 2 };
 
+/// kEdgeSlots[s][j]: the two slots of a tet other than s and j (s != j).
+constexpr std::uint8_t kEdgeSlots[4][4][2] = {
+    {{0, 0}, {2, 3}, {1, 3}, {1, 2}},
+    {{2, 3}, {0, 0}, {0, 3}, {0, 2}},
+    {{1, 3}, {0, 3}, {0, 0}, {0, 1}},
+    {{1, 2}, {0, 2}, {0, 1}, {0, 0}},
+};
+
 /// Open-addressing map from an undirected edge to the new-tet face that holds it, reused
 /// across insertions (only the used slots are cleared).
 class EdgeMap {
@@ -288,10 +296,8 @@ class Kernel {
       // The other 3 faces contain p and one edge of the boundary face: pair them by edge.
       for (std::uint32_t j = 0; j < 4; ++j) {
         if (j == b.slot) continue;
-        std::uint32_t e[2], k = 0;
-        for (std::uint32_t i = 0; i < 4; ++i)
-          if (i != j && i != b.slot) e[k++] = b.v[i];
-        const std::uint32_t other = edges_.match(e[0], e[1], 4 * t + j);
+        const std::uint8_t* e = kEdgeSlots[b.slot][j];  // the two slots other than j and p's
+        const std::uint32_t other = edges_.match(b.v[e[0]], b.v[e[1]], 4 * t + j);
         if (other != kNone) {
           adj(t, j) = other;
           adj_of(other) = 4 * t + j;

@@ -8,9 +8,15 @@
 //       > 0  when e lies strictly inside the circumsphere, < 0 outside, 0 on it.
 //
 // Every function returns the exact sign (-1, 0, +1) for any finite double input: a fast
-// floating-point evaluation is accepted when its error bound (Shewchuk's stage-A bound,
-// computed from the permanent) proves the sign; otherwise the determinant is evaluated
-// exactly in integer arithmetic (every double is an integer times a power of two).
+// floating-point evaluation is accepted when an error bound proves the sign; otherwise the
+// determinant is evaluated exactly in integer arithmetic (every double is an integer times a
+// power of two). Two bounds, both from Shewchuk's stage-A analysis (error <= c*eps*permanent,
+// c = 7 for orient3d, 16 for insphere, for exactly this evaluation order):
+//  - semi-static (cheap): the permanent is bounded by the largest coordinate differences
+//    m_x, m_y, m_z (M = their max): orient3d permanent <= 6 m_x m_y m_z, insphere permanent
+//    <= 72 M^2 m_x m_y m_z (lifts <= 3M^2; 4 lifts x 3 terms x 2 m_x m_y m_z). Valid while those
+//    products neither underflow nor overflow, which the range checks guarantee;
+//  - otherwise the permanent itself is computed (any finite input).
 // The code requires IEEE double arithmetic without FMA contraction (-ffp-contract=off).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
@@ -31,6 +37,24 @@ std::uint64_t exact_calls();
 inline constexpr double kEps = 0x1p-53;  // unit roundoff of IEEE double
 inline constexpr double kOrient3dBound = (7.0 + 56.0 * kEps) * kEps;
 inline constexpr double kInsphereBound = (16.0 + 224.0 * kEps) * kEps;
+// Semi-static constants: 6 * 7 eps = 4.663e-15 and 72 * 16 eps = 1.279e-13, rounded up by
+// more than 0.5% to absorb the O(eps) rounding of the bound's own products.
+inline constexpr double kOrient3dStatic = 4.7e-15;
+inline constexpr double kInsphereStatic = 1.3e-13;
+
+/// Out-of-line filters with the permanent as bound: for inputs outside the semi-static range.
+int orient3d_permanent(const double* a, const double* b, const double* c, const double* d);
+int insphere_permanent(const double* a, const double* b, const double* c, const double* d,
+                       const double* e);
+
+namespace detail {
+// Plain comparisons compile to maxsd/minsd (std::fmax/fmin carry NaN rules; inputs are finite).
+inline double max2(double x, double y) { return x > y ? x : y; }
+inline double min2(double x, double y) { return x < y ? x : y; }
+inline double abs_max4(double p, double q, double r, double s) {
+  return max2(max2(std::fabs(p), std::fabs(q)), max2(std::fabs(r), std::fabs(s)));
+}
+}  // namespace detail
 
 inline int orient3d(const double* a, const double* b, const double* c, const double* d) {
   const double bax = b[0] - a[0], bay = b[1] - a[1], baz = b[2] - a[2];
@@ -40,10 +64,14 @@ inline int orient3d(const double* a, const double* b, const double* c, const dou
   const double m3 = caz * dax, m4 = cax * daz;
   const double m5 = cax * day, m6 = cay * dax;
   const double det = bax * (m1 - m2) + bay * (m3 - m4) + baz * (m5 - m6);
-  const double permanent = std::fabs(bax) * (std::fabs(m1) + std::fabs(m2)) +
-                           std::fabs(bay) * (std::fabs(m3) + std::fabs(m4)) +
-                           std::fabs(baz) * (std::fabs(m5) + std::fabs(m6));
-  const double bound = kOrient3dBound * permanent;
+  using detail::max2;
+  using detail::min2;
+  const double mx = max2(std::fabs(bax), max2(std::fabs(cax), std::fabs(dax)));
+  const double my = max2(std::fabs(bay), max2(std::fabs(cay), std::fabs(day)));
+  const double mz = max2(std::fabs(baz), max2(std::fabs(caz), std::fabs(daz)));
+  const double lo = min2(mx, min2(my, mz)), hi = max2(mx, max2(my, mz));
+  if (!(lo >= 1e-97 && hi <= 1e102)) return orient3d_permanent(a, b, c, d);  // products of 3
+  const double bound = kOrient3dStatic * (mx * my * mz);                        // in [1e-291, 1e306]
   if (det > bound) return 1;
   if (-det > bound) return -1;
   return orient3d_exact(a, b, c, d);
@@ -73,23 +101,17 @@ inline int insphere(const double* a, const double* b, const double* c, const dou
   const double clift = cex * cex + cey * cey + cez * cez;
   const double dlift = dex * dex + dey * dey + dez * dez;
 
-  // Shewchuk's determinant: > 0 when e is inside for (a,b,c,d) negatively oriented in
-  // kdmesh's convention, hence the final negation.
   const double det = (dlift * abc - clift * dab) + (blift * cda - alift * bcd);
 
-  const double paz = std::fabs(aez), pbz = std::fabs(bez), pcz = std::fabs(cez),
-               pdz = std::fabs(dez);
-  const double pab = std::fabs(aexbey) + std::fabs(bexaey);
-  const double pbc = std::fabs(bexcey) + std::fabs(cexbey);
-  const double pcd = std::fabs(cexdey) + std::fabs(dexcey);
-  const double pda = std::fabs(dexaey) + std::fabs(aexdey);
-  const double pac = std::fabs(aexcey) + std::fabs(cexaey);
-  const double pbd = std::fabs(bexdey) + std::fabs(dexbey);
-  const double permanent = (pcd * pbz + pbd * pcz + pbc * pdz) * alift +
-                           (pda * pcz + pac * pdz + pcd * paz) * blift +
-                           (pab * pdz + pbd * paz + pda * pbz) * clift +
-                           (pbc * paz + pac * pbz + pab * pcz) * dlift;
-  const double bound = kInsphereBound * permanent;
+  const double mx = detail::abs_max4(aex, bex, cex, dex);
+  const double my = detail::abs_max4(aey, bey, cey, dey);
+  const double mz = detail::abs_max4(aez, bez, cez, dez);
+  const double lo = detail::min2(mx, detail::min2(my, mz));
+  const double hi = detail::max2(mx, detail::max2(my, mz));
+  if (!(lo >= 1e-58 && hi <= 1e61)) return insphere_permanent(a, b, c, d, e);  // products of 5
+  const double bound = kInsphereStatic * (hi * hi * (mx * my * mz));            // in [1e-290, 1e305]
+  // Shewchuk's determinant is > 0 when e is inside for (a,b,c,d) negatively oriented in
+  // kdmesh's convention, hence the negation.
   if (det > bound) return -1;
   if (-det > bound) return 1;
   return insphere_exact(a, b, c, d, e);

@@ -14,6 +14,22 @@ struct ReferenceResult {
   std::vector<std::uint32_t> tets;  ///< 4 point ids per finite tet, positively oriented
   std::size_t num_vertices = 0;     ///< distinct vertices actually in the triangulation
   double seconds = 0;               ///< time of the triangulation call itself
+
+  /// Predicate counts, summed over all insertions; all 0 unless counting was asked for
+  /// (CgalOptions::count; TetGen never counts). See cgal_delaunay for their exact meaning.
+  bool counted = false;
+  std::uint64_t locate_orient_tests = 0;  ///< Orientation_3 calls made by point location
+  std::uint64_t orient_tests = 0;         ///< all Orientation_3 calls (location included)
+  std::uint64_t sphere_tests = 0;         ///< Side_of_oriented_sphere_3 calls
+  std::uint64_t conflicts = 0;            ///< cells found in conflict (removed by insertions)
+};
+
+/// How cgal_delaunay runs. Plain Epick unless `count` is set.
+struct CgalOptions {
+  /// Count predicates (ReferenceResult's counters). This uses a separate instantiation of
+  /// the triangulation, on counting traits, that walks with exact predicates only (see
+  /// cgal_delaunay), so its `seconds` are not CGAL's normal speed: time without counting.
+  bool count = false;
 };
 
 /// All results use canonical ids (canonical_point_ids: the smallest id of each group of
@@ -30,7 +46,26 @@ ReferenceResult tetgen_delaunay(const PointSet& points);
 /// order, each located from the vertex of its hint. Without: CGAL's own insert(first, last)
 /// (spatial sort). Throws GeometryError when the points span no volume, UsageError for an
 /// ordering that is not a permutation.
-ReferenceResult cgal_delaunay(const PointSet& points, const Ordering* order);
+///
+/// With options.count, the points are inserted in the same order on traits derived from Epick
+/// whose Orientation_3 and Side_of_oriented_sphere_3 count their calls, with a cell type that
+/// counts its removals. Each insertion is CGAL's own insert(p, start), split into its two public
+/// halves, locate(p, lt, li, lj, start) then insert(p, lt, c, li, lj), so that:
+///  - locate_orient_tests: Orientation_3 calls during location. Plain Epick first walks with
+///    inexact double-precision tests outside the traits ("structural filtering") and then
+///    confirms with a short exact walk; the counting traits do not enable that filter, so the
+///    whole walk (CGAL's remembering stochastic walk from the hint's cell) is made of exact,
+///    counted Orientation_3 tests, as in a Delaunay_triangulation_3 on a non-Epick kernel;
+///  - orient_tests: every Orientation_3 call of the insertions: location plus the conflict
+///    tests of infinite cells and the symbolic-perturbation tie-breaks;
+///  - sphere_tests: Side_of_oriented_sphere_3 calls, one per finite cell tested for conflict
+///    (the conflict search tests the cavity and its neighbours across the cavity boundary);
+///  - conflicts: cells removed by the insertions, i.e. the cells found in conflict (the
+///    cavities, infinite cells included), as kdmesh's DelaunayStats::conflicts.
+/// The range insertion (order == nullptr) is counted by repeating CGAL's own code: the same
+/// spatial_sort of the points, then insertion along it, each located from the previous vertex.
+ReferenceResult cgal_delaunay(const PointSet& points, const Ordering* order,
+                              const CgalOptions& options = {});
 
 /// Volume of the convex hull of `points`, from CGAL::convex_hull_3 (exact predicates),
 /// independent of any tetrahedralization. 0 for fewer than 4 non-coplanar points.

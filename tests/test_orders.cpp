@@ -82,11 +82,59 @@ void expect_valid(const PointSet& ps, const Ordering& o, OrderKind kind) {
 }
 
 // ---------------------------------------------------------------------------------------
+// kd-local: the kd-bfs tree, reordered in subtree blocks
+// ---------------------------------------------------------------------------------------
+
+TEST(KdLocalOrder, SameTreeParentsFirstBlocksContiguous) {
+  const PointSet pts = generate_points(Distribution::cylinder, 20000, 3);
+  const Ordering bfs = make_order(pts, {OrderKind::kd_bfs, 1, 0.125});
+  OrderOptions opt{OrderKind::kd_local, 1, 0.125};
+  opt.local_points = 600;
+  const Ordering loc = make_order(pts, opt);
+  ASSERT_EQ(loc.size(), pts.size());
+  // Every point keeps its kd parent and level: only the emission order changes.
+  std::vector<std::uint32_t> hint_of(pts.size()), level_of(pts.size()), rank(pts.size());
+  for (std::size_t k = 0; k < bfs.size(); ++k) {
+    hint_of[bfs.order[k]] = bfs.hint[k];
+    level_of[bfs.order[k]] = bfs.level[k];
+  }
+  for (std::size_t k = 0; k < loc.size(); ++k) rank[loc.order[k]] = std::uint32_t(k);
+  for (std::size_t k = 0; k < loc.size(); ++k) {
+    EXPECT_EQ(loc.hint[k], hint_of[loc.order[k]]);
+    EXPECT_EQ(loc.level[k], level_of[loc.order[k]]);
+    if (loc.hint[k] != kNoHint) EXPECT_LT(rank[loc.hint[k]], k) << "parent after child";
+  }
+  // Levels never decrease within the top part, and below the block level the order is made of
+  // contiguous blocks: once a block ends, no later point has a parent inside it, so a point's
+  // parent is either above the block level or in the current block.
+  // The block level: 20000 >> L <= 600 first at L = 6 (20000/64 = 312).
+  std::size_t k = 0;
+  while (k < loc.size() && loc.level[k] < 6) ++k;
+  for (std::size_t j = 0; j < k; ++j) EXPECT_EQ(loc.order[j], bfs.order[j]);
+  std::size_t block_start = k;
+  for (; k < loc.size(); ++k) {
+    if (loc.level[k] == 6) {
+      block_start = k;
+      continue;
+    }
+    EXPECT_GE(rank[loc.hint[k]], block_start) << "point " << k << " left its block";
+  }
+}
+
+TEST(KdLocalOrder, SmallInputsEqualKdBfs) {
+  const PointSet pts = generate_points(Distribution::cube, 1000, 5);
+  const Ordering bfs = make_order(pts, {OrderKind::kd_bfs, 1, 0.125});
+  const Ordering loc = make_order(pts, {OrderKind::kd_local, 1, 0.125});  // 1000 <= 4096
+  EXPECT_EQ(loc.order, bfs.order);
+  EXPECT_EQ(loc.hint, bfs.hint);
+}
+
+// ---------------------------------------------------------------------------------------
 // Names
 // ---------------------------------------------------------------------------------------
 
 TEST(OrderNames, RoundTripAndUnknown) {
-  const std::vector<std::string> expected = {"kd-bfs", "kd-bfs-alt", "hilbert",
+  const std::vector<std::string> expected = {"kd-bfs", "kd-bfs-alt", "kd-local", "hilbert",
                                              "brio",   "random",     "input"};
   EXPECT_EQ(order_kind_names(), expected);
   for (const std::string& name : expected) {
