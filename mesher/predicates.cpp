@@ -75,58 +75,19 @@ void cross2(mpz_t out, const mpz_t x, const mpz_t y, const mpz_t z, const mpz_t 
 std::uint64_t exact_calls() { return t_exact_calls; }
 
 int orient3d_permanent(const double* a, const double* b, const double* c, const double* d) {
-  const double bax = b[0] - a[0], bay = b[1] - a[1], baz = b[2] - a[2];
-  const double cax = c[0] - a[0], cay = c[1] - a[1], caz = c[2] - a[2];
-  const double dax = d[0] - a[0], day = d[1] - a[1], daz = d[2] - a[2];
-  const double m1 = cay * daz, m2 = caz * day;
-  const double m3 = caz * dax, m4 = cax * daz;
-  const double m5 = cax * day, m6 = cay * dax;
-  const double det = bax * (m1 - m2) + bay * (m3 - m4) + baz * (m5 - m6);
-  const double permanent = std::fabs(bax) * (std::fabs(m1) + std::fabs(m2)) +
-                           std::fabs(bay) * (std::fabs(m3) + std::fabs(m4)) +
-                           std::fabs(baz) * (std::fabs(m5) + std::fabs(m6));
-  const double bound = kOrient3dBound * permanent;
-  if (det > bound) return 1;
-  if (-det > bound) return -1;
+  const detail::Eval r = detail::orient3d_eval<true>(a, b, c, d);
+  const double bound = kOrient3dBound * r.permanent;
+  if (r.det > bound) return 1;
+  if (-r.det > bound) return -1;
   return orient3d_exact(a, b, c, d);
 }
 
 int insphere_permanent(const double* a, const double* b, const double* c, const double* d,
                        const double* e) {
-  const double aex = a[0] - e[0], aey = a[1] - e[1], aez = a[2] - e[2];
-  const double bex = b[0] - e[0], bey = b[1] - e[1], bez = b[2] - e[2];
-  const double cex = c[0] - e[0], cey = c[1] - e[1], cez = c[2] - e[2];
-  const double dex = d[0] - e[0], dey = d[1] - e[1], dez = d[2] - e[2];
-  const double aexbey = aex * bey, bexaey = bex * aey, ab = aexbey - bexaey;
-  const double bexcey = bex * cey, cexbey = cex * bey, bc = bexcey - cexbey;
-  const double cexdey = cex * dey, dexcey = dex * cey, cd = cexdey - dexcey;
-  const double dexaey = dex * aey, aexdey = aex * dey, da = dexaey - aexdey;
-  const double aexcey = aex * cey, cexaey = cex * aey, ac = aexcey - cexaey;
-  const double bexdey = bex * dey, dexbey = dex * bey, bd = bexdey - dexbey;
-  const double abc = aez * bc - bez * ac + cez * ab;
-  const double bcd = bez * cd - cez * bd + dez * bc;
-  const double cda = cez * da + dez * ac + aez * cd;
-  const double dab = dez * ab + aez * bd + bez * da;
-  const double alift = aex * aex + aey * aey + aez * aez;
-  const double blift = bex * bex + bey * bey + bez * bez;
-  const double clift = cex * cex + cey * cey + cez * cez;
-  const double dlift = dex * dex + dey * dey + dez * dez;
-  const double det = (dlift * abc - clift * dab) + (blift * cda - alift * bcd);
-  const double paz = std::fabs(aez), pbz = std::fabs(bez), pcz = std::fabs(cez),
-               pdz = std::fabs(dez);
-  const double pab = std::fabs(aexbey) + std::fabs(bexaey);
-  const double pbc = std::fabs(bexcey) + std::fabs(cexbey);
-  const double pcd = std::fabs(cexdey) + std::fabs(dexcey);
-  const double pda = std::fabs(dexaey) + std::fabs(aexdey);
-  const double pac = std::fabs(aexcey) + std::fabs(cexaey);
-  const double pbd = std::fabs(bexdey) + std::fabs(dexbey);
-  const double permanent = (pcd * pbz + pbd * pcz + pbc * pdz) * alift +
-                           (pda * pcz + pac * pdz + pcd * paz) * blift +
-                           (pab * pdz + pbd * paz + pda * pbz) * clift +
-                           (pbc * paz + pac * pbz + pab * pcz) * dlift;
-  const double bound = kInsphereBound * permanent;
-  if (det > bound) return -1;  // Shewchuk's sign is opposite to kdmesh's convention
-  if (-det > bound) return 1;
+  const detail::Eval r = detail::insphere_eval<true>(a, b, c, d, e);
+  const double bound = kInsphereBound * r.permanent;
+  if (r.det > bound) return -1;  // Shewchuk's sign is opposite to kdmesh's convention
+  if (-r.det > bound) return 1;
   return insphere_exact(a, b, c, d, e);
 }
 

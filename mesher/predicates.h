@@ -54,31 +54,43 @@ inline double min2(double x, double y) { return x < y ? x : y; }
 inline double abs_max4(double p, double q, double r, double s) {
   return max2(max2(std::fabs(p), std::fabs(q)), max2(std::fabs(r), std::fabs(s)));
 }
-}  // namespace detail
 
-inline int orient3d(const double* a, const double* b, const double* c, const double* d) {
+/// A determinant evaluated in floating point with the scale of its error bound: either the
+/// largest coordinate differences (semi-static) or the permanent (kPermanent).
+struct Eval {
+  double det;
+  double mx, my, mz;  // largest |difference| per axis (semi-static scale)
+  double permanent;   // only with kPermanent
+};
+
+/// det[b-a, c-a, d-a] in one fixed evaluation order (the one the bounds are derived for).
+template <bool kPermanent>
+inline Eval orient3d_eval(const double* a, const double* b, const double* c, const double* d) {
   const double bax = b[0] - a[0], bay = b[1] - a[1], baz = b[2] - a[2];
   const double cax = c[0] - a[0], cay = c[1] - a[1], caz = c[2] - a[2];
   const double dax = d[0] - a[0], day = d[1] - a[1], daz = d[2] - a[2];
   const double m1 = cay * daz, m2 = caz * day;
   const double m3 = caz * dax, m4 = cax * daz;
   const double m5 = cax * day, m6 = cay * dax;
-  const double det = bax * (m1 - m2) + bay * (m3 - m4) + baz * (m5 - m6);
-  using detail::max2;
-  using detail::min2;
-  const double mx = max2(std::fabs(bax), max2(std::fabs(cax), std::fabs(dax)));
-  const double my = max2(std::fabs(bay), max2(std::fabs(cay), std::fabs(day)));
-  const double mz = max2(std::fabs(baz), max2(std::fabs(caz), std::fabs(daz)));
-  const double lo = min2(mx, min2(my, mz)), hi = max2(mx, max2(my, mz));
-  if (!(lo >= 1e-97 && hi <= 1e102)) return orient3d_permanent(a, b, c, d);  // products of 3
-  const double bound = kOrient3dStatic * (mx * my * mz);                        // in [1e-291, 1e306]
-  if (det > bound) return 1;
-  if (-det > bound) return -1;
-  return orient3d_exact(a, b, c, d);
+  Eval r{};
+  r.det = bax * (m1 - m2) + bay * (m3 - m4) + baz * (m5 - m6);
+  if constexpr (kPermanent) {
+    r.permanent = std::fabs(bax) * (std::fabs(m1) + std::fabs(m2)) +
+                  std::fabs(bay) * (std::fabs(m3) + std::fabs(m4)) +
+                  std::fabs(baz) * (std::fabs(m5) + std::fabs(m6));
+  } else {
+    r.mx = max2(std::fabs(bax), max2(std::fabs(cax), std::fabs(dax)));
+    r.my = max2(std::fabs(bay), max2(std::fabs(cay), std::fabs(day)));
+    r.mz = max2(std::fabs(baz), max2(std::fabs(caz), std::fabs(daz)));
+  }
+  return r;
 }
 
-inline int insphere(const double* a, const double* b, const double* c, const double* d,
-                    const double* e) {
+/// Shewchuk's insphere determinant det[[a-e, |a-e|^2], ..., [d-e, |d-e|^2]]: > 0 when e is
+/// inside for (a,b,c,d) negatively oriented in kdmesh's convention (callers negate).
+template <bool kPermanent>
+inline Eval insphere_eval(const double* a, const double* b, const double* c, const double* d,
+                          const double* e) {
   const double aex = a[0] - e[0], aey = a[1] - e[1], aez = a[2] - e[2];
   const double bex = b[0] - e[0], bey = b[1] - e[1], bez = b[2] - e[2];
   const double cex = c[0] - e[0], cey = c[1] - e[1], cez = c[2] - e[2];
@@ -101,19 +113,52 @@ inline int insphere(const double* a, const double* b, const double* c, const dou
   const double clift = cex * cex + cey * cey + cez * cez;
   const double dlift = dex * dex + dey * dey + dez * dez;
 
-  const double det = (dlift * abc - clift * dab) + (blift * cda - alift * bcd);
+  Eval r{};
+  r.det = (dlift * abc - clift * dab) + (blift * cda - alift * bcd);
+  if constexpr (kPermanent) {
+    const double paz = std::fabs(aez), pbz = std::fabs(bez), pcz = std::fabs(cez),
+                 pdz = std::fabs(dez);
+    const double pab = std::fabs(aexbey) + std::fabs(bexaey);
+    const double pbc = std::fabs(bexcey) + std::fabs(cexbey);
+    const double pcd = std::fabs(cexdey) + std::fabs(dexcey);
+    const double pda = std::fabs(dexaey) + std::fabs(aexdey);
+    const double pac = std::fabs(aexcey) + std::fabs(cexaey);
+    const double pbd = std::fabs(bexdey) + std::fabs(dexbey);
+    r.permanent = (pcd * pbz + pbd * pcz + pbc * pdz) * alift +
+                  (pda * pcz + pac * pdz + pcd * paz) * blift +
+                  (pab * pdz + pbd * paz + pda * pbz) * clift +
+                  (pbc * paz + pac * pbz + pab * pcz) * dlift;
+  } else {
+    r.mx = abs_max4(aex, bex, cex, dex);
+    r.my = abs_max4(aey, bey, cey, dey);
+    r.mz = abs_max4(aez, bez, cez, dez);
+  }
+  return r;
+}
+}  // namespace detail
 
-  const double mx = detail::abs_max4(aex, bex, cex, dex);
-  const double my = detail::abs_max4(aey, bey, cey, dey);
-  const double mz = detail::abs_max4(aez, bez, cez, dez);
-  const double lo = detail::min2(mx, detail::min2(my, mz));
-  const double hi = detail::max2(mx, detail::max2(my, mz));
+inline int orient3d(const double* a, const double* b, const double* c, const double* d) {
+  using detail::max2;
+  using detail::min2;
+  const detail::Eval r = detail::orient3d_eval<false>(a, b, c, d);
+  const double lo = min2(r.mx, min2(r.my, r.mz)), hi = max2(r.mx, max2(r.my, r.mz));
+  if (!(lo >= 1e-97 && hi <= 1e102)) return orient3d_permanent(a, b, c, d);  // products of 3
+  const double bound = kOrient3dStatic * (r.mx * r.my * r.mz);                  // in [1e-291, 1e306]
+  if (r.det > bound) return 1;
+  if (-r.det > bound) return -1;
+  return orient3d_exact(a, b, c, d);
+}
+
+inline int insphere(const double* a, const double* b, const double* c, const double* d,
+                    const double* e) {
+  using detail::max2;
+  using detail::min2;
+  const detail::Eval r = detail::insphere_eval<false>(a, b, c, d, e);
+  const double lo = min2(r.mx, min2(r.my, r.mz)), hi = max2(r.mx, max2(r.my, r.mz));
   if (!(lo >= 1e-58 && hi <= 1e61)) return insphere_permanent(a, b, c, d, e);  // products of 5
-  const double bound = kInsphereStatic * (hi * hi * (mx * my * mz));            // in [1e-290, 1e305]
-  // Shewchuk's determinant is > 0 when e is inside for (a,b,c,d) negatively oriented in
-  // kdmesh's convention, hence the negation.
-  if (det > bound) return -1;
-  if (-det > bound) return 1;
+  const double bound = kInsphereStatic * (hi * hi * (r.mx * r.my * r.mz));      // in [1e-290, 1e305]
+  if (r.det > bound) return -1;  // Shewchuk's sign is opposite to kdmesh's convention
+  if (-r.det > bound) return 1;
   return insphere_exact(a, b, c, d, e);
 }
 
