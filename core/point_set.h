@@ -22,4 +22,14 @@ struct PointSet {
   }
 };
 
+/// The exponent k for which points * 2^k have their largest |coordinate| in [0.5, 1), or 0
+/// when that scaling would underflow a non-zero coordinate below the smallest normal double
+/// (or the set is empty or all zero). Multiplying by 2^k is then exact, so every orientation
+/// and insphere sign, and hence every Delaunay tetrahedralization, is unchanged; only the
+/// magnitudes move to where volumes and third-party tolerances behave (e.g. 1e+-200 inputs).
+int unit_scale_exponent(const PointSet& points);
+
+/// points * 2^exponent, coordinate by coordinate (std::ldexp; exact for unit_scale_exponent).
+PointSet scaled_copy(const PointSet& points, int exponent);
+
 }  // namespace kdmesh

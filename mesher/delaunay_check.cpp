@@ -143,10 +143,15 @@ ValidityReport check_delaunay(const PointSet& points, const Triangulation& tri,
   }
 
   // 4. The tets cover the convex hull exactly once: compare volumes with an independent hull.
-  r.volume = total_volume(points, finite_tets(tri));
-  r.hull_volume = convex_hull_volume(points);
-  const double tol = 1e-9 * std::max(std::fabs(r.hull_volume), 1e-300);
-  r.volume_matches = std::fabs(r.volume - r.hull_volume) <= tol;
+  //    Compared at unit scale (an exact power-of-two rescaling), so that 1e+-200 inputs
+  //    neither overflow nor underflow; reported in the input's units.
+  const int k = unit_scale_exponent(points);
+  const PointSet unit = scaled_copy(points, k);
+  const double volume = total_volume(unit, finite_tets(tri));
+  const double hull = convex_hull_volume(unit);
+  r.volume = std::ldexp(volume, -3 * k);
+  r.hull_volume = std::ldexp(hull, -3 * k);
+  r.volume_matches = std::fabs(volume - hull) <= 1e-9 * std::max(std::fabs(hull), 1e-300);
   if (!r.volume_matches)
     problem("total tet volume " + std::to_string(r.volume) + " differs from the convex hull's " +
             std::to_string(r.hull_volume));

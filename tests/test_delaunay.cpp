@@ -150,12 +150,27 @@ TEST(Delaunay, DegenerateStarts) {
 }
 
 TEST(Delaunay, ExtremeScales) {
-  for (double scale : {1e-6, 1e6}) {
+  for (double scale : {1e-200, 1e-6, 1e6, 1e200}) {
     PointSet pts = generate_points(Distribution::cube, 2000, 9);
     for (auto& x : pts.xyz) x = x * scale + 3 * scale;
     expect_valid(pts, run(pts), "scale " + std::to_string(scale));
     const PointSet lat = lattice(5, scale, scale);
     expect_valid(lat, run(lat), "lattice scale " + std::to_string(scale));
+  }
+}
+
+// Regression: TetGen crashed (SIGSEGV in its cleanup) on points scaled by 1e-200, and the
+// volume check overflowed to inf at 1e+200. Scaling by a power of two changes no tet.
+TEST(Delaunay, RegressionTetgenAndVolumeAtScale1e200) {
+  const PointSet base = generate_points(Distribution::cube, 2000, 3);
+  const auto reference = canonical_tets(base, run(base).tri);
+  for (int e : {-664, 664}) {  // 2^+-664 ~ 1e+-200
+    const PointSet pts = scaled_copy(base, e);
+    const auto r = run(pts);
+    expect_valid(pts, r, "scale 2^" + std::to_string(e));
+    EXPECT_TRUE(compare_tets(base, reference, canonical_tets(pts, r.tri)).same_set());
+    EXPECT_TRUE(compare_tets(base, reference, tetgen_delaunay(pts).tets).same_set());
+    EXPECT_TRUE(compare_tets(base, reference, cgal_delaunay(pts, nullptr).tets).same_set());
   }
 }
 

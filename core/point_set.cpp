@@ -1,0 +1,31 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "core/point_set.h"
+
+#include <cfloat>
+#include <cmath>
+
+namespace kdmesh {
+
+int unit_scale_exponent(const PointSet& points) {
+  double hi = 0, lo = INFINITY;
+  for (const double v : points.xyz) {
+    const double a = std::fabs(v);
+    if (a > hi) hi = a;
+    if (a > 0 && a < lo) lo = a;
+  }
+  if (hi == 0 || !std::isfinite(hi)) return 0;
+  int e;
+  std::frexp(hi, &e);  // hi = m * 2^e, 0.5 <= m < 1
+  const int k = -e;
+  if (std::ldexp(lo, k) < DBL_MIN) return 0;  // would lose bits of the smallest coordinate
+  return k;
+}
+
+PointSet scaled_copy(const PointSet& points, int exponent) {
+  PointSet out;
+  out.xyz.resize(points.xyz.size());
+  for (std::size_t i = 0; i < points.xyz.size(); ++i) out.xyz[i] = std::ldexp(points.xyz[i], exponent);
+  return out;
+}
+
+}  // namespace kdmesh
