@@ -130,6 +130,23 @@ TEST(Cli, LatticeCheckPassesWithTies) {
   EXPECT_NEAR(j["check"]["validity"]["volume"].get<double>(), 125.0, 1e-9);
 }
 
+// A slab 1e-12 thick is valid input, but thinner than TetGen 1.5's tolerance: the check
+// says TetGen was skipped and still passes on the exact check and CGAL.
+TEST(Cli, CheckSkipsTetgenOnSlabsItCannotTake) {
+  std::string text;
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 20; ++j)
+      text += std::to_string(i * 0.05 + 0.001 * j) + " " + std::to_string(j * 0.05) + " " +
+              std::to_string((i * 7 + j * 13) % 11) + "e-13\n";  // exact text, no rounding
+  const fs::path p = write_file("slab.xyz", text);
+  const CliResult r = kdmesh("delaunay " + p.string() + " --check --json -q");
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["check"]["validity"]["pass"].get<bool>());
+  EXPECT_TRUE(j["check"]["tetgen"].contains("skipped"));
+  EXPECT_TRUE(j["check"]["cgal"]["pass"].get<bool>());
+}
+
 TEST(Cli, DuplicatesAreReportedByIndex) {
   const fs::path p = write_file("dups.xyz", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0\n1 1 1\n0 0 1\n");
   const CliResult r = kdmesh("delaunay " + p.string() + " --order input --check");
