@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "tests/support/scratch.h"
 #include "core/tet_mesh.h"
 #include "io/vtu_writer.h"
 
@@ -35,23 +36,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// A fresh path under KDMESH_TEST_TMP, unique per test and call (reruns overwrite, so the
-/// directory does not grow; the files stay for inspection after a failure).
-std::string scratch(const std::string& ext) {
-  static std::string current_test;
-  static int counter = 0;
-  const fs::path dir = fs::path(KDMESH_TEST_TMP) / "io_vtu";
-  fs::create_directories(dir);
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::string test = std::string(info->test_suite_name()) + "." + info->name();
-  if (test != current_test) {
-    current_test = test;
-    counter = 0;
-  }
-  const fs::path p = dir / (test + "-" + std::to_string(counter++) + ext);
-  fs::remove_all(p);
-  return p.string();
-}
+std::string scratch(const std::string& ext) { return test::scratch_path("io_vtu", ext); }
 
 std::string slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

@@ -1,0 +1,30 @@
+// Test support: scratch file paths under the build's test directory.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+namespace kdmesh::test {
+
+/// A fresh path under KDMESH_TEST_TMP/<area>, unique per test and call: "<suite>.<test>-<n><ext>".
+/// Reruns overwrite, so the directory does not grow; files stay for inspection after a failure.
+inline std::string scratch_path(const std::string& area, const std::string& ext) {
+  namespace fs = std::filesystem;
+  static std::string current_test;
+  static int counter = 0;
+  const fs::path dir = fs::path(KDMESH_TEST_TMP) / area;
+  fs::create_directories(dir);
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const std::string test = std::string(info->test_suite_name()) + "." + info->name();
+  if (test != current_test) {
+    current_test = test;
+    counter = 0;
+  }
+  const fs::path p = dir / (test + "-" + std::to_string(counter++) + ext);
+  fs::remove_all(p);
+  return p.string();
+}
+
+}  // namespace kdmesh::test
