@@ -99,9 +99,11 @@ class Kernel {
   Kernel(const PointSet& points, const std::uint32_t* ids, DelaunayStats& stats)
       : xyz_(points.xyz.data()), ids_(ids), n_(points.size()), stats_(stats), rng_(0x6b646d657368ULL) {
     v2t_.assign(n_, kNone);
-    // ~6.7 tets per point for uniform points; reserving avoids the 2x spike of a late
-    // reallocation (the vector still grows if a distribution needs more).
-    const std::size_t expect = n_ * 27 / 4 + 64;
+    // Delaunay tetrahedralizations have ~6.76 tets per point for uniform points (6.2-6.5 on
+    // surfaces). Reserve 7.5: only touched pages become resident, so the reserve costs address
+    // space, not memory, while a reallocation would briefly hold two copies (at 5M points a
+    // reserve of 6.75 was exceeded by 0.1% and the peak went from ~290 to ~495 bytes/point).
+    const std::size_t expect = n_ * 15 / 2 + 64;
     T_.reserve(8 * expect);
     state_.reserve(expect);
   }
