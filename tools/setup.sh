@@ -20,6 +20,7 @@ JOBS="${JOBS:-$(nproc)}"
 PACKAGES=(
   build-essential
   cmake
+  gnuplot-nox
   libbenchmark-dev
   libcgal-dev
   libcli11-dev

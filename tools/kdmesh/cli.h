@@ -32,5 +32,6 @@ using Runner = std::function<int()>;
 /// Each subcommand registers itself and sets `run` to its action when it is selected.
 void add_points_command(CLI::App& app, Runner& run);
 void add_delaunay_command(CLI::App& app, Runner& run);
+void add_bench_command(CLI::App& app, Runner& run);
 
 }  // namespace kdmesh::cli

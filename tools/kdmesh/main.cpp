@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   kdmesh::cli::Runner run;
   kdmesh::cli::add_points_command(app, run);
   kdmesh::cli::add_delaunay_command(app, run);
+  kdmesh::cli::add_bench_command(app, run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

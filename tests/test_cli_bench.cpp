@@ -1,0 +1,191 @@
+// `kdmesh bench` end to end through the real executable: a tiny run of all three kernels,
+// its CSV, tables and plots; the per-run timeout; bad selections.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliResult {
+  int code;
+  std::string out, err;
+};
+
+fs::path tmpdir() {
+  static const fs::path d = [] {
+    fs::path p = fs::path(KDMESH_TEST_TMP) / ("cli-bench-" + std::to_string(::getpid()));
+    fs::create_directories(p);
+    return p;
+  }();
+  return d;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+CliResult kdmesh(const std::string& args) {
+  static int counter = 0;
+  // ctest runs every test case as its own process, in parallel: names must be unique per process.
+  const std::string tag = std::to_string(::getpid()) + "-" + std::to_string(counter++);
+  const fs::path out = tmpdir() / ("stdout-" + tag);
+  const fs::path err = tmpdir() / ("stderr-" + tag);
+  const std::string cmd = std::string(KDMESH_EXE) + " " + args + " >" + out.string() + " 2>" + err.string();
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+std::vector<std::string> split(const std::string& line, char sep) {
+  std::vector<std::string> v;
+  std::string cell;
+  std::istringstream s(line);
+  while (std::getline(s, cell, sep)) v.push_back(cell);
+  if (!line.empty() && line.back() == sep) v.emplace_back();
+  return v;
+}
+
+/// results.csv as rows of column name -> text (no quoted cells expected in these runs).
+std::vector<std::map<std::string, std::string>> read_csv(const fs::path& p, std::vector<std::string>& header) {
+  std::istringstream in(slurp(p));
+  std::string line;
+  std::getline(in, line);
+  header = split(line, ',');
+  std::vector<std::map<std::string, std::string>> rows;
+  while (std::getline(in, line)) {
+    const std::vector<std::string> cells = split(line, ',');
+    EXPECT_EQ(cells.size(), header.size()) << line;
+    std::map<std::string, std::string> row;
+    for (std::size_t i = 0; i < header.size() && i < cells.size(); ++i) row[header[i]] = cells[i];
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+double positive(const std::map<std::string, std::string>& row, const std::string& col) {
+  const std::string& text = row.at(col);
+  EXPECT_FALSE(text.empty()) << col << " of " << row.at("dist") << " " << row.at("kernel") << " "
+                             << row.at("order");
+  const double x = text.empty() ? 0.0 : std::stod(text);
+  EXPECT_TRUE(std::isfinite(x) && x > 0) << col << " = " << text;
+  return x;
+}
+
+TEST(CliBench, SmokeRunAllKernels) {
+  const fs::path out = tmpdir() / "smoke";
+  const CliResult r = kdmesh("bench --dists cube,axes --sizes 2000 --orders kd-bfs,hilbert,cgal --out " +
+                             out.string() + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);  // stdout is exactly one JSON document
+  EXPECT_EQ(j["command"], "bench");
+
+  // Per distribution: kdmesh x {kd-bfs, hilbert}, cgal x {kd-bfs, hilbert, range}, tetgen;
+  // plus Table 15's order-only runs (kd-bfs, hilbert) on the cube.
+  std::vector<std::string> header;
+  const auto rows = read_csv(out / "results.csv", header);
+  const std::vector<std::string> expected_header = {
+      "dist", "n", "kernel", "order", "status", "order_seconds", "delaunay_seconds", "total_seconds",
+      "orient_per_point", "conflicts_per_point", "sphere_tests_per_point", "orient_all_per_point",
+      "peak_rss_bytes", "bytes_per_point", "tets", "wall_seconds", "count_wall_seconds", "note"};
+  EXPECT_EQ(header, expected_header);
+  ASSERT_EQ(rows.size(), 14u);
+  EXPECT_EQ(j["runs"], 14);
+  std::map<std::string, int> runs_per_kernel;
+  std::map<std::string, std::string> tets_of_dist;
+  for (const auto& row : rows) {
+    SCOPED_TRACE(row.at("dist") + " " + row.at("kernel") + " " + row.at("order"));
+    EXPECT_EQ(row.at("status"), "ok") << row.at("note");
+    EXPECT_EQ(row.at("n"), "2000");
+    ++runs_per_kernel[row.at("kernel")];
+    const std::string& kernel = row.at("kernel");
+    if (kernel == "order-only") {
+      positive(row, "order_seconds");
+      EXPECT_TRUE(row.at("delaunay_seconds").empty());
+      continue;
+    }
+    positive(row, "delaunay_seconds");
+    const double total = positive(row, "total_seconds");
+    EXPECT_GE(total, std::stod(row.at("delaunay_seconds")));
+    EXPECT_GT(positive(row, "peak_rss_bytes"), 1e6);
+    EXPECT_GE(std::stod(row.at("bytes_per_point")), 0.0);
+    positive(row, "tets");
+    // General position: every kernel and order yields the same Delaunay tetrahedralization.
+    if (tets_of_dist.count(row.at("dist"))) {
+      EXPECT_EQ(row.at("tets"), tets_of_dist[row.at("dist")]);
+    }
+    tets_of_dist[row.at("dist")] = row.at("tets");
+    if (kernel == "tetgen") {
+      EXPECT_TRUE(row.at("orient_per_point").empty());  // TetGen is not instrumented
+      continue;
+    }
+    EXPECT_GT(positive(row, "orient_per_point"), 1.0);
+    EXPECT_GT(positive(row, "conflicts_per_point"), 1.0);
+    if (kernel == "cgal") {
+      EXPECT_GE(positive(row, "orient_all_per_point"), std::stod(row.at("orient_per_point")));
+      positive(row, "sphere_tests_per_point");
+    } else {
+      EXPECT_TRUE(row.at("sphere_tests_per_point").empty());
+      positive(row, "order_seconds");
+    }
+  }
+  EXPECT_EQ(runs_per_kernel["kdmesh"], 4);
+  EXPECT_EQ(runs_per_kernel["cgal"], 6);
+  EXPECT_EQ(runs_per_kernel["tetgen"], 2);
+  EXPECT_EQ(runs_per_kernel["order-only"], 2);
+
+  const std::string md = slurp(out / "tables.md");
+  for (const char* heading : {"### Table 1 Cube", "### Table 7 Axes", "### Table 8 Cube", "### Table 14 Axes",
+                              "## Table 15", "cgal range", "tetgen"})
+    EXPECT_NE(md.find(heading), std::string::npos) << heading;
+  EXPECT_EQ(md.find("Table 2 "), std::string::npos);  // planes did not run
+  // Plots when gnuplot is installed (a warning, not an error, without it).
+  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
+    for (const char* png : {"time_per_point.png", "cube.png", "axes.png"})
+      EXPECT_GT(fs::file_size(out / "plots" / png), 1000u) << png;
+  } else {
+    EXPECT_NE(r.err.find("gnuplot"), std::string::npos);
+  }
+  // One progress line per run on stderr.
+  EXPECT_NE(r.err.find("[ 14/14]"), std::string::npos) << r.err;
+}
+
+TEST(CliBench, TimeoutKillsTheRun) {
+  const fs::path out = tmpdir() / "timeout";
+  const CliResult r = kdmesh("bench --dists cube --sizes 300000 --kernels kdmesh --orders random "
+                             "--order-sizes 0 --timeout 0.3 --no-plots -q --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::vector<std::string> header;
+  const auto rows = read_csv(out / "results.csv", header);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].at("status"), "timeout");
+  EXPECT_TRUE(rows[0].at("total_seconds").empty());
+  EXPECT_NE(slurp(out / "tables.md").find("timeout"), std::string::npos);
+}
+
+TEST(CliBench, BadSelectionsAreUsageErrors) {
+  const CliResult help = kdmesh("bench --help");
+  EXPECT_EQ(help.code, 0);
+  EXPECT_NE(help.out.find("--json"), std::string::npos);
+  EXPECT_NE(help.out.find("--full"), std::string::npos);
+  EXPECT_EQ(kdmesh("--help").out.find("bench-run"), std::string::npos);  // hidden
+  EXPECT_EQ(kdmesh("bench --kernels nope -q --out " + (tmpdir() / "bad").string()).code, 2);
+  EXPECT_EQ(kdmesh("bench --dists moon -q --out " + (tmpdir() / "bad").string()).code, 2);
+  EXPECT_EQ(kdmesh("bench-run --dist cube -n 100 --kernel kdmesh --order cgal").code, 2);
+}
+
+}  // namespace
