@@ -6,6 +6,12 @@
 
 namespace kdmesh {
 
+std::size_t first_non_finite(const PointSet& points) {
+  for (std::size_t i = 0; i < points.xyz.size(); ++i)
+    if (!std::isfinite(points.xyz[i])) return i / 3;
+  return points.size();
+}
+
 int unit_scale_exponent(const PointSet& points) {
   double hi = 0, lo = INFINITY;
   for (const double v : points.xyz) {

@@ -22,6 +22,9 @@ struct PointSet {
   }
 };
 
+/// Index of the first point with a NaN or infinite coordinate, or size() if all are finite.
+std::size_t first_non_finite(const PointSet& points);
+
 /// The exponent k for which points * 2^k have their largest |coordinate| in [0.5, 1), or 0
 /// when that scaling would underflow a non-zero coordinate below the smallest normal double
 /// (or the set is empty or all zero). Multiplying by 2^k is then exact, so every orientation

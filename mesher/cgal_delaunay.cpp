@@ -92,11 +92,8 @@ Point cgal_point(const PointSet& points, std::uint32_t i) {
 }
 
 void check_finite(const PointSet& points) {
-  for (std::size_t i = 0; i < points.xyz.size(); ++i) {
-    if (!std::isfinite(points.xyz[i])) {
-      throw GeometryError("point " + std::to_string(i / 3) + " has a non-finite coordinate");
-    }
-  }
+  const std::size_t i = first_non_finite(points);
+  if (i < points.size()) throw GeometryError("point " + std::to_string(i) + " has a non-finite coordinate");
 }
 
 /// Throws UsageError unless `order` is a permutation of the n point ids whose hints are

@@ -12,41 +12,18 @@
 #include <sstream>
 #include <string>
 
+#include "tests/support/run_cli.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliResult {
-  int code;
-  std::string out, err;
-};
+using kdmesh::test::CliResult;
+using kdmesh::test::slurp;
 
-fs::path tmpdir() {
-  static const fs::path d = [] {
-    fs::path p = fs::path(KDMESH_TEST_TMP) / ("cli-" + std::to_string(::getpid()));
-    fs::create_directories(p);
-    return p;
-  }();
-  return d;
-}
+fs::path tmpdir() { return kdmesh::test::process_tmpdir("cli"); }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-CliResult kdmesh(const std::string& args) {
-  static int counter = 0;
-  // ctest runs every test case as its own process, in parallel: names must be unique per process.
-  const std::string tag = std::to_string(::getpid()) + "-" + std::to_string(counter++);
-  const fs::path out = tmpdir() / ("stdout-" + tag);
-  const fs::path err = tmpdir() / ("stderr-" + tag);
-  const std::string cmd = std::string(KDMESH_EXE) + " " + args + " >" + out.string() + " 2>" + err.string();
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
+CliResult kdmesh(const std::string& args) { return kdmesh::test::run_kdmesh(args, tmpdir()); }
 
 fs::path write_file(const std::string& name, const std::string& text) {
   const fs::path p = tmpdir() / name;

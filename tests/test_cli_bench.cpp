@@ -13,43 +13,20 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+
+#include "tests/support/run_cli.h"
 #include <vector>
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliResult {
-  int code;
-  std::string out, err;
-};
+using kdmesh::test::CliResult;
+using kdmesh::test::slurp;
 
-fs::path tmpdir() {
-  static const fs::path d = [] {
-    fs::path p = fs::path(KDMESH_TEST_TMP) / ("cli-bench-" + std::to_string(::getpid()));
-    fs::create_directories(p);
-    return p;
-  }();
-  return d;
-}
+fs::path tmpdir() { return kdmesh::test::process_tmpdir("cli-bench"); }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-CliResult kdmesh(const std::string& args) {
-  static int counter = 0;
-  // ctest runs every test case as its own process, in parallel: names must be unique per process.
-  const std::string tag = std::to_string(::getpid()) + "-" + std::to_string(counter++);
-  const fs::path out = tmpdir() / ("stdout-" + tag);
-  const fs::path err = tmpdir() / ("stderr-" + tag);
-  const std::string cmd = std::string(KDMESH_EXE) + " " + args + " >" + out.string() + " 2>" + err.string();
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
+CliResult kdmesh(const std::string& args) { return kdmesh::test::run_kdmesh(args, tmpdir()); }
 
 std::vector<std::string> split(const std::string& line, char sep) {
   std::vector<std::string> v;
