@@ -455,4 +455,10 @@ std::vector<std::uint32_t> finite_tets(const Triangulation& tri) {
   return out;
 }
 
+std::size_t count_finite_tets(const Triangulation& tri) {
+  std::size_t n = 0;
+  for (std::size_t t = 0; t < tri.num_tets(); ++t) n += !tri.is_infinite(t);
+  return n;
+}
+
 }  // namespace kdmesh

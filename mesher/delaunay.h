@@ -44,4 +44,7 @@ DelaunayResult delaunay(const PointSet& points, const Ordering& order,
 /// The finite tets of `tri`, 4 point ids each, positively oriented.
 std::vector<std::uint32_t> finite_tets(const Triangulation& tri);
 
+/// How many tets of `tri` are finite (no copy).
+std::size_t count_finite_tets(const Triangulation& tri);
+
 }  // namespace kdmesh

@@ -183,8 +183,7 @@ int run_delaunay(const Options& o) {
   const double t_del = clock.seconds();
   std::size_t num_tets = tets.size() / 4;
   if (o.kernel == "kdmesh") {
-    num_tets = 0;
-    for (std::size_t t = 0; t < tri.num_tets(); ++t) num_tets += !tri.is_infinite(t);
+    num_tets = count_finite_tets(tri);
     if (o.check || !o.output.empty()) tets = finite_tets(tri);
   }
   if (num_tets == 0)
