@@ -209,10 +209,8 @@ void sort_by_priority(const double* (&p)[N]) {
 
 }  // namespace
 
-int insphere_perturbed(const double* a, const double* b, const double* c, const double* d,
-                       const double* e) {
-  const int s = insphere(a, b, c, d, e);
-  if (s != 0) return s;
+int insphere_tiebreak(const double* a, const double* b, const double* c, const double* d,
+                      const double* e) {
   // e is exactly on the sphere. Perturb the lifted coordinate of point i by eps^(rank), the
   // lexicographically largest point getting the dominant term. The coefficient of point X's
   // term is (up to sign) the orientation of the other four with e in X's place.

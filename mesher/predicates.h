@@ -162,6 +162,10 @@ inline int insphere(const double* a, const double* b, const double* c, const dou
   return insphere_exact(a, b, c, d, e);
 }
 
+/// The tie-break of insphere_perturbed, for e exactly on the sphere (out of line: rare).
+int insphere_tiebreak(const double* a, const double* b, const double* c, const double* d,
+                      const double* e);
+
 /// Lexicographic (x, then y, then z) comparison: the priority of symbolic perturbation.
 inline bool lex_less(const double* p, const double* q) {
   if (p[0] != q[0]) return p[0] < q[0];
@@ -174,8 +178,11 @@ inline bool lex_less(const double* p, const double* q) {
 /// coordinate of each point, with larger perturbations for lexicographically larger
 /// points (the scheme of CGAL's Delaunay_triangulation_3, so the tie-break does not depend
 /// on insertion order and matches CGAL's).
-int insphere_perturbed(const double* a, const double* b, const double* c, const double* d,
-                       const double* e);
+inline int insphere_perturbed(const double* a, const double* b, const double* c, const double* d,
+                              const double* e) {
+  const int s = insphere(a, b, c, d, e);
+  return s != 0 ? s : insphere_tiebreak(a, b, c, d, e);
+}
 
 /// For e coplanar with triangle (a,b,c) and q any point off that plane: > 0 if e lies
 /// inside the circumcircle of (a,b,c), < 0 outside; never 0 (same perturbation scheme).
