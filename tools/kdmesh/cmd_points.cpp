@@ -44,7 +44,8 @@ void add_points_command(CLI::App& app, Runner& run) {
   auto opts = std::make_shared<PointsOptions>();
   CLI::App* cmd = app.add_subcommand("points", "Generate a point distribution of the paper (Fig. 6)");
   cmd->add_option("--dist", opts->dist, "Distribution")
-      ->check(CLI::IsMember({"cube", "planes", "paraboloid", "spiral", "disk", "cylinder", "axes"}))
+      ->check(CLI::IsMember({"cube", "planes", "paraboloid", "spiral", "disk", "cylinder", "axes",
+                             "constrained-cube", "refined-constrained-cube"}))
       ->capture_default_str();
   cmd->add_option("-n", opts->n, "Number of points")->check(CLI::Range(std::size_t(1), std::size_t(1) << 28))->capture_default_str();
   cmd->add_option("--seed", opts->seed, "Random seed (same seed, same points)")->capture_default_str();

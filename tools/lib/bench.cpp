@@ -199,8 +199,11 @@ std::vector<std::size_t> bench_paper_sizes(const std::string& dist) {
     case Distribution::spiral:
     case Distribution::disk:
     case Distribution::cylinder: return steps(360000, 2160000, 360000);
+    // The practical models (Tables 16-17), emulated by the constrained-cube generators.
+    case Distribution::constrained_cube: return {4386533};
+    case Distribution::refined_constrained_cube: return {5500000};
   }
-  return {};
+  throw UsageError("bench: no sizes for distribution '" + dist + "'");
 }
 
 std::vector<std::size_t> bench_default_sizes(const std::string& dist) {
