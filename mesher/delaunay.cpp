@@ -2,12 +2,12 @@
 //
 // Storage: one flat array of 32-byte tet records (core/tet_mesh.h: Triangulation): 4 vertex
 // ids then 4 face references; adj(t,i) = 4u+j means face i of t (opposite v(t,i)) is face j
-// of u. An infinite vertex closes the hull,
-// so every face has a neighbour and the triangulation is a closed 3-sphere.
+// of u. An infinite vertex closes the hull, so every face has a neighbour and the
+// triangulation is a closed 3-sphere.
 // Insertion: stochastic visibility walk from the hint's tet; cavity grown breadth-first with
 // the perturbed insphere test; the star of the new point is built over the cavity boundary;
-// cavity slots are recycled (then a free list, then the end of the arrays), so the steady
-// state allocates nothing.
+// new tets take the cavity's slots first (then the free list, then the end of the array), so
+// the steady state allocates nothing.
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "mesher/delaunay.h"
 
@@ -29,9 +29,9 @@ namespace {
 constexpr std::uint32_t kInf = kInfiniteVertex;
 constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 constexpr std::uint32_t kAliasBit = 0x80000000u;  // v2t entry of a duplicate: alias | vertex id
-constexpr std::uint32_t kDead = 0xFFFFFFFEu;      // V[4t] of a tet on the free list
-// Face references 4*t+f must fit in 32 bits: tets < 2^30. Delaunay tetrahedralizations have
-// about 6.7 tets per point (at most ~7.5 in practice), so 2^27 points stay well inside.
+constexpr std::uint32_t kDead = 0xFFFFFFFEu;      // vertex 0 of a tet on the free list
+// Face references 4*t+f must fit in 32 bits: tets < 2^30. The distributions measured here give
+// 6.1-6.8 tets per point (docs/verification.md), so 2^27 points stay well inside.
 constexpr std::size_t kMaxPoints = std::size_t(1) << 27;
 
 enum : std::uint8_t { kUnvisited = 0, kInCavity = 1, kOutside = 2 };
