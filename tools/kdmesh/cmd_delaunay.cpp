@@ -156,8 +156,6 @@ int run_delaunay(const Options& o) {
     opt.progress = out.progress("delaunay");
     DelaunayResult r = delaunay(pts, ord, opt);
     tri = std::move(r.tri);
-    // The finite tets are copied out only when an output or a check needs them: the copy is
-    // 16 bytes per tet, a third of the peak memory of a plain run.
     const double k = double(std::max<std::uint64_t>(r.stats.inserted, 1));
     counts = {{"inserted", r.stats.inserted},
               {"duplicates", r.stats.duplicates.size()},
@@ -183,6 +181,8 @@ int run_delaunay(const Options& o) {
   const double t_del = clock.seconds();
   std::size_t num_tets = tets.size() / 4;
   if (o.kernel == "kdmesh") {
+    // The finite tets are copied out only when an output or a check needs them: the copy is
+    // 16 bytes per tet, a third of the peak memory of a plain run.
     num_tets = count_finite_tets(tri);
     if (o.check || !o.output.empty()) tets = finite_tets(tri);
   }
