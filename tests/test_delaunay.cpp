@@ -117,6 +117,20 @@ TEST(Delaunay, DuplicatesAreReportedAndSkipped) {
   EXPECT_TRUE(compare_tets(pts, canonical_tets(pts, r.tri), canonical_tets(base, run(base).tri)).same_set());
 }
 
+// Points 1e-15 apart are distinct points, not duplicates: they must all become vertices, and
+// the result must still be the unique Delaunay tetrahedralization that TetGen and CGAL find.
+TEST(Delaunay, NearDuplicatesAreDistinctVertices) {
+  PointSet pts = generate_points(Distribution::cube, 500, 8);
+  for (std::uint32_t i = 0; i < 50; ++i) pts.push_back(pts.p(i)[0] + 1e-15, pts.p(i)[1], pts.p(i)[2]);
+  const auto r = run(pts);
+  expect_valid(pts, r, "near-duplicates");
+  EXPECT_EQ(r.stats.inserted, pts.size());
+  EXPECT_TRUE(r.stats.duplicates.empty());
+  const auto tets = canonical_tets(pts, r.tri);
+  EXPECT_TRUE(compare_tets(pts, tets, tetgen_delaunay(pts).tets).same_set());
+  EXPECT_TRUE(compare_tets(pts, tets, cgal_delaunay(pts, nullptr).tets).same_set());
+}
+
 TEST(Delaunay, TinyInputs) {
   PointSet four;
   for (const auto& q : {std::array<double, 3>{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}})
