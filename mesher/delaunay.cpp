@@ -59,16 +59,14 @@ class EdgeMap {
     }
     mask_ = keys_.size() - 1;
   }
-  /// Returns the stored face for edge (a,b) and erases it, or records `face` and returns kNone.
+  /// Returns the face stored for edge (a,b), or records `face` and returns kNone. Each edge of
+  /// a cavity boundary is seen exactly twice, so a matched entry is simply never asked again.
   std::uint32_t match(std::uint32_t a, std::uint32_t b, std::uint32_t face) {
     if (a > b) std::swap(a, b);
     const std::uint64_t key = (std::uint64_t(a) << 32) | b;
     std::size_t s = (key * 0x9E3779B97F4A7C15ULL) >> 40 & mask_;
     while (keys_[s] != kEmpty) {
-      if (keys_[s] == key) {
-        keys_[s] = kTomb;
-        return vals_[s];
-      }
+      if (keys_[s] == key) return vals_[s];
       s = (s + 1) & mask_;
     }
     keys_[s] = key;
@@ -79,7 +77,6 @@ class EdgeMap {
 
  private:
   static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
-  static constexpr std::uint64_t kTomb = ~std::uint64_t(0) - 1;
   std::vector<std::uint64_t> keys_;
   std::vector<std::uint32_t> vals_;
   std::vector<std::uint32_t> used_;
@@ -306,8 +303,9 @@ class Kernel {
         }
       }
       for (std::uint32_t i = 0; i < 4; ++i)
-        if (b.v[i] != kInf) v2t_[b.v[i]] = t;
+        if (i != b.slot && b.v[i] != kInf) v2t_[b.v[i]] = t;
     }
+    v2t_[pid] = t;  // every new tet contains p
     last_ = t;
   }
 
