@@ -3,6 +3,7 @@
 #
 #   bash tools/setup.sh demo    install + build + mesh a shipped sample (README command 1)
 #   bash tools/setup.sh test    install + build + run the whole test suite (README command 2)
+#   bash tools/setup.sh sanitize  install + build with ASan/UBSan (CMake preset "sanitize") + run all tests
 #   bash tools/setup.sh build   install + build only
 #   bash tools/setup.sh deps    install only
 #
@@ -67,6 +68,12 @@ case "$goal" in
     install_deps; build
     ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS"
     ;;
+  sanitize)
+    install_deps
+    cmake --preset sanitize
+    cmake --build --preset sanitize -j "$JOBS"
+    ctest --preset sanitize -j "$JOBS"
+    ;;
   demo)
     install_deps; build
     mkdir -p out
@@ -74,5 +81,5 @@ case "$goal" in
     "$BUILD_DIR/kdmesh" delaunay out/cube-200k.xyz --order kd-bfs --check -o out/cube-200k.vtu
     echo "setup: wrote out/cube-200k.vtu"
     ;;
-  *) echo "usage: bash tools/setup.sh {demo|test|build|deps}" >&2; exit 2 ;;
+  *) echo "usage: bash tools/setup.sh {demo|test|sanitize|build|deps}" >&2; exit 2 ;;
 esac
