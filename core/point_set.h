@@ -35,4 +35,21 @@ int unit_scale_exponent(const PointSet& points);
 /// points * 2^exponent, coordinate by coordinate (std::ldexp; exact for unit_scale_exponent).
 PointSet scaled_copy(const PointSet& points, int exponent);
 
+/// The points at unit scale: a rescaled copy when unit_scale_exponent asks for one, otherwise
+/// the input itself (no copy in the common case). The input must outlive this object.
+class UnitScaled {
+ public:
+  explicit UnitScaled(const PointSet& points)
+      : input_(&points), exponent_(unit_scale_exponent(points)) {
+    if (exponent_ != 0) copy_ = scaled_copy(points, exponent_);
+  }
+  const PointSet& points() const { return exponent_ != 0 ? copy_ : *input_; }
+  int exponent() const { return exponent_; }
+
+ private:
+  const PointSet* input_;
+  int exponent_;
+  PointSet copy_;
+};
+
 }  // namespace kdmesh

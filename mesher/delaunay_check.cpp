@@ -21,7 +21,8 @@ std::string tet_str(const Triangulation& tri, std::size_t t) {
   std::string s = "tet " + std::to_string(t) + " (";
   for (int i = 0; i < 4; ++i) {
     const std::uint32_t v = tri.v(t, i);
-    s += (i ? " " : "") + (v == kInfiniteVertex ? std::string("inf") : std::to_string(v));
+    if (i) s += ' ';
+    s += v == kInfiniteVertex ? std::string("inf") : std::to_string(v);
   }
   return s + ")";
 }
@@ -145,10 +146,10 @@ ValidityReport check_delaunay(const PointSet& points, const Triangulation& tri,
   // 4. The tets cover the convex hull exactly once: compare volumes with an independent hull.
   //    Compared at unit scale (an exact power-of-two rescaling), so that 1e+-200 inputs
   //    neither overflow nor underflow; reported in the input's units.
-  const int k = unit_scale_exponent(points);
-  const PointSet unit = scaled_copy(points, k);
-  const double volume = total_volume(unit, finite_tets(tri));
-  const double hull = convex_hull_volume(unit);
+  const UnitScaled unit(points);
+  const int k = unit.exponent();
+  const double volume = total_volume(unit.points(), finite_tets(tri));
+  const double hull = convex_hull_volume(unit.points());
   r.volume = std::ldexp(volume, -3 * k);
   r.hull_volume = std::ldexp(hull, -3 * k);
   r.volume_matches = std::fabs(volume - hull) <= 1e-9 * std::max(std::fabs(hull), 1e-300);

@@ -159,10 +159,8 @@ std::string tetgen_error_text(int code) {
 ReferenceResult tetgen_delaunay(const PointSet& original) {
   // TetGen's internal tolerances are not scale-free (it crashed on points scaled by 1e-200):
   // hand it the points scaled exactly by a power of two to unit size. Ids are unchanged.
-  const int exponent = unit_scale_exponent(original);
-  PointSet rescaled;
-  if (exponent != 0) rescaled = scaled_copy(original, exponent);
-  const PointSet& points = exponent != 0 ? rescaled : original;
+  const UnitScaled unit(original);
+  const PointSet& points = unit.points();
   const std::size_t n = points.size();
   if (n < 4) throw GeometryError("TetGen: fewer than 4 points, no tetrahedralization");
   if (n > std::size_t(INT_MAX)) {

@@ -73,7 +73,8 @@ nlohmann::json run_checks(const Options& o, const PointSet& pts, const Triangula
   bool ok = true;
   nlohmann::json j;
   // Volumes are compared at unit scale (exact power-of-two rescaling; same tets).
-  const PointSet unit = scaled_copy(pts, unit_scale_exponent(pts));
+  const UnitScaled scaled(pts);
+  const PointSet& unit = scaled.points();
   out.stage("check: exact validity");
   Stopwatch clock;
   const ValidityReport v = check_delaunay(pts, tri);
