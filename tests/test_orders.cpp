@@ -102,7 +102,9 @@ TEST(KdLocalOrder, SameTreeParentsFirstBlocksContiguous) {
   for (std::size_t k = 0; k < loc.size(); ++k) {
     EXPECT_EQ(loc.hint[k], hint_of[loc.order[k]]);
     EXPECT_EQ(loc.level[k], level_of[loc.order[k]]);
-    if (loc.hint[k] != kNoHint) EXPECT_LT(rank[loc.hint[k]], k) << "parent after child";
+    if (loc.hint[k] != kNoHint) {
+      EXPECT_LT(rank[loc.hint[k]], k) << "parent after child";
+    }
   }
   // Levels never decrease within the top part, and below the block level the order is made of
   // contiguous blocks: once a block ends, no later point has a parent inside it, so a point's
