@@ -1,0 +1,44 @@
+// kdmesh — tetrahedron shape measures and their summaries.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/tet_mesh.h"
+
+namespace kdmesh {
+
+struct TetQuality {
+  double volume = 0;          ///< signed (positive for positively oriented tets)
+  double min_dihedral = 0;    ///< degrees
+  double max_dihedral = 0;    ///< degrees
+  double radius_ratio = 0;    ///< gamma = 3 r_in / R_circ, 1 for the regular tet, 0 degenerate
+  double radius_edge = 0;     ///< R_circ / shortest edge (sqrt(6)/4 ~ 0.612 regular)
+  double volume_length = 0;   ///< 6 sqrt(2) V / l_rms^3, 1 for the regular tet
+};
+
+/// Measures of the tet (a, b, c, d), each pointing to xyz.
+TetQuality tet_quality(const double* a, const double* b, const double* c, const double* d);
+
+/// Summary of one measure over a mesh: min, max, mean and a histogram over [lo, hi).
+struct Histogram {
+  double lo = 0, hi = 1;
+  std::vector<std::uint64_t> counts;  ///< equal-width bins; values outside clamp to the ends
+};
+
+struct QualitySummary {
+  std::size_t tets = 0;
+  std::size_t inverted = 0;           ///< volume <= 0
+  double min_dihedral = 0, max_dihedral = 0;  ///< extremes over the mesh (degrees)
+  double mean_radius_ratio = 0, min_radius_ratio = 0;
+  double max_radius_edge = 0;
+  double mean_volume_length = 0, min_volume_length = 0;
+  Histogram min_dihedral_hist;        ///< per-tet min dihedral, [0, 90) degrees, 18 bins
+  Histogram radius_ratio_hist;        ///< [0, 1], 10 bins
+};
+
+/// Per-tet measures (parallel over tets) and their summary.
+QualitySummary summarize_quality(const TetMesh& mesh, std::vector<TetQuality>* per_tet = nullptr);
+
+}  // namespace kdmesh

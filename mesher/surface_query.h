@@ -1,0 +1,33 @@
+// kdmesh — geometric queries against a closed surface: inside/outside, closest point.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <memory>
+
+#include "core/surface_mesh.h"
+
+namespace kdmesh {
+
+/// An AABB tree over a closed, outward-oriented surface (CGAL inside the .cpp).
+/// Queries are const and thread-safe. The surface must outlive the query object.
+class SurfaceQuery {
+ public:
+  explicit SurfaceQuery(const SurfaceMesh& surface);
+  ~SurfaceQuery();
+  SurfaceQuery(const SurfaceQuery&) = delete;
+  SurfaceQuery& operator=(const SurfaceQuery&) = delete;
+
+  /// +1 strictly inside the solid, -1 strictly outside, 0 on the surface.
+  int side(const double* p) const;
+  /// Closest surface point to p: writes it to `out`, its facet to *facet (if not null), and
+  /// returns the distance.
+  double closest(const double* p, double* out, std::uint32_t* facet = nullptr) const;
+  /// Distance from p to the surface.
+  double distance(const double* p) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace kdmesh

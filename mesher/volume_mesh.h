@@ -1,0 +1,63 @@
+// kdmesh — conforming volume mesh of a solid from its nodes
+// (pipeline stage: NodeSet -> Ordering -> Delaunay -> inside tets -> VolumeMesh).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/tet_mesh.h"
+#include "mesher/delaunay.h"
+#include "mesher/node_set.h"
+#include "mesher/order.h"
+#include "mesher/surface_prepare.h"
+#include "mesher/surface_query.h"
+#include "sizing/sizing_field.h"
+
+namespace kdmesh {
+
+struct VolumeMeshOptions {
+  OrderOptions order;                ///< insertion order of the nodes (kd-bfs by default)
+  int max_steiner_rounds = 12;       ///< rounds of surface Steiner insertion before giving up
+  /// A boundary face must lie within hausdorff_tolerance * h (local target size) of the
+  /// input surface; farther faces get a Steiner point on the surface.
+  double hausdorff_tolerance = 0.1;
+  /// Progress: stage name and fraction done.
+  std::function<void(const std::string&, double)> progress;
+};
+
+struct VolumeMeshStats {
+  std::size_t input_nodes = 0;
+  std::size_t steiner_points = 0;     ///< surface points added to recover the boundary
+  std::size_t dropped_nodes = 0;      ///< interior nodes too close to the surface, removed
+  int rounds = 0;                     ///< Steiner rounds used
+  DelaunayStats delaunay;             ///< of the first (full) tetrahedralization
+  double order_seconds = 0, delaunay_seconds = 0, classify_seconds = 0, recover_seconds = 0;
+};
+
+/// The tets inside the solid. Points are the input nodes followed by the Steiner points;
+/// point ids refer to `nodes`. Every tet is positively oriented.
+struct VolumeMesh {
+  NodeSet nodes;                          ///< input nodes + Steiner points (kind surface/edge)
+  std::vector<std::uint32_t> tets;        ///< 4 node ids per tet
+  std::vector<std::uint32_t> tet_region;  ///< body id (PreparedSurface) per tet
+  std::vector<std::uint32_t> boundary;    ///< 3 node ids per boundary face, normal outward
+  std::vector<std::uint32_t> boundary_tet;  ///< the tet each boundary face belongs to
+  VolumeMeshStats stats;
+
+  std::size_t num_tets() const { return tets.size() / 4; }
+};
+
+/// Tetrahedralizes `nodes` (Delaunay, in options.order) and keeps the tets inside the solid;
+/// inserts Steiner points on the surface where boundary faces miss it. Throws GeometryError
+/// if the boundary cannot be recovered within max_steiner_rounds (naming where).
+VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query,
+                       const SizingField& sizing, NodeSet nodes,
+                       const VolumeMeshOptions& options = {});
+
+/// The mesh as writers take it: points, tets, point data "node_kind" and "target_size",
+/// cell data "region", "min_dihedral", "radius_ratio".
+TetMesh to_tet_mesh(const VolumeMesh& mesh);
+
+}  // namespace kdmesh
