@@ -105,6 +105,18 @@ class Kernel {
     state_.reserve(expect);
   }
 
+  /// Takes over an existing triangulation whose vertex ids index `points` directly (ids_ must
+  /// then be the identity), to insert more points into it.
+  void adopt(Triangulation&& tri, std::size_t extra_points) {
+    T_ = std::move(tri.data);
+    T_.reserve(T_.size() + 8 * (extra_points * 15 / 2 + 64));
+    state_.assign(T_.size() / 8, kUnvisited);
+    for (std::size_t t = 0; t < T_.size() / 8; ++t)
+      for (int i = 0; i < 4; ++i)
+        if (T_[8 * t + i] != kInf) v2t_[T_[8 * t + i]] = std::uint32_t(t);
+    last_ = 0;
+  }
+
   const double* P(std::uint32_t v) const { return xyz_ + 3 * std::size_t(v); }
 
   /// Creates the first tet from 4 non-coplanar points and closes it with 4 infinite tets.
@@ -442,6 +454,41 @@ DelaunayResult delaunay(const PointSet& points, const Ordering& order,
   st.seconds = clock.seconds();
   if (options.progress) options.progress(1.0);
   return result;
+}
+
+void delaunay_insert(Triangulation& tri, const PointSet& points,
+                     const std::vector<std::uint32_t>& ids,
+                     const std::vector<std::uint32_t>& hints, DelaunayStats& stats) {
+  Stopwatch clock;
+  const std::size_t n = points.size();
+  if (n > kMaxPoints)
+    throw UsageError("delaunay_insert: " + std::to_string(n) +
+                     " points exceed the kernel's limit of " + std::to_string(kMaxPoints));
+  if (hints.size() != ids.size())
+    throw UsageError("delaunay_insert: " + std::to_string(hints.size()) + " hints for " +
+                     std::to_string(ids.size()) + " points");
+  if (tri.num_tets() == 0)
+    throw UsageError("delaunay_insert: the triangulation is empty (use delaunay() first)");
+  for (std::uint32_t id : ids)
+    if (id >= n)
+      throw UsageError("delaunay_insert: point id " + std::to_string(id) + " out of range (" +
+                       std::to_string(n) + " points)");
+  // Validate before the kernel takes the records over: on error `tri` is left unchanged.
+  for (std::size_t t = 0; t < tri.num_tets(); ++t)
+    for (int i = 0; i < 4; ++i)
+      if (tri.v(t, i) != kInf && tri.v(t, i) >= n)
+        throw UsageError("delaunay_insert: the triangulation has vertex " +
+                         std::to_string(tri.v(t, i)) + " but only " + std::to_string(n) +
+                         " points are given");
+  const std::uint64_t exact0 = pred::exact_calls();
+  std::vector<std::uint32_t> identity(n);
+  for (std::size_t i = 0; i < n; ++i) identity[i] = std::uint32_t(i);
+  Kernel kernel(points, identity.data(), stats);
+  kernel.adopt(std::move(tri), ids.size());
+  for (std::size_t k = 0; k < ids.size(); ++k) kernel.insert(ids[k], hints[k]);
+  tri = kernel.release();
+  stats.exact_fallbacks += pred::exact_calls() - exact0;
+  stats.seconds += clock.seconds();
 }
 
 std::vector<std::uint32_t> finite_tets(const Triangulation& tri) {

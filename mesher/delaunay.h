@@ -41,6 +41,19 @@ struct DelaunayResult {
 DelaunayResult delaunay(const PointSet& points, const Ordering& order,
                         const DelaunayOptions& options = {});
 
+/// Inserts more points into a Delaunay triangulation (e.g. Steiner points).
+///  - tri:    a Triangulation from delaunay() (or this function) whose vertex ids index `points`
+///  - points: every point, those already in `tri` at the same ids and the new ones
+///  - ids:    the points to insert, in this order
+///  - hints:  per inserted point, a point id already in the triangulation to start locating
+///            from (e.g. a vertex of the face being repaired), or kNoHint
+/// Adds to `stats` (inserted, orient_tests, conflicts, duplicates, seconds). The result is the
+/// Delaunay tetrahedralization of all points, under the same tie-breaking as delaunay().
+/// Throws UsageError for out-of-range ids or a mismatched triangulation.
+void delaunay_insert(Triangulation& tri, const PointSet& points,
+                     const std::vector<std::uint32_t>& ids,
+                     const std::vector<std::uint32_t>& hints, DelaunayStats& stats);
+
 /// The finite tets of `tri`, 4 point ids each, positively oriented.
 std::vector<std::uint32_t> finite_tets(const Triangulation& tri);
 

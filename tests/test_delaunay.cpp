@@ -97,6 +97,40 @@ TEST(Delaunay, IntegerLatticeIsValidOrderIndependentAndMatchesCgal) {
   EXPECT_NEAR(total_volume(pts, tg.tets), 729.0, 1e-9);
 }
 
+// Inserting points into an existing triangulation (Steiner points) must give the Delaunay
+// tetrahedralization of all points: in general position it is unique, so it equals the one
+// built in one go. Also on the lattice (degenerate) the tie-breaking is order-independent.
+TEST(Delaunay, InsertIntoExistingTriangulationEqualsOneGo) {
+  for (const PointSet& pts : {generate_points(Distribution::cube, 4000, 5), lattice(7)}) {
+    const std::size_t n = pts.size(), half = n / 2;
+    PointSet first;
+    first.xyz.assign(pts.xyz.begin(), pts.xyz.begin() + 3 * half);
+    DelaunayResult r = run(first);
+    std::vector<std::uint32_t> ids, hints;
+    for (std::size_t i = half; i < n; ++i) {
+      ids.push_back(std::uint32_t(i));
+      hints.push_back(i % 3 == 0 ? kNoHint : std::uint32_t(i % half));  // both kinds of start
+    }
+    delaunay_insert(r.tri, pts, ids, hints, r.stats);
+    EXPECT_EQ(r.stats.inserted, n);
+    expect_valid(pts, r, "insert into existing");
+    EXPECT_TRUE(compare_tets(pts, canonical_tets(pts, run(pts).tri), canonical_tets(pts, r.tri))
+                    .same_set());
+  }
+}
+
+TEST(Delaunay, InsertRejectsBadArguments) {
+  const PointSet pts = generate_points(Distribution::cube, 100, 1);
+  DelaunayResult r = run(pts);
+  EXPECT_THROW(delaunay_insert(r.tri, pts, {100}, {kNoHint}, r.stats), UsageError);
+  EXPECT_THROW(delaunay_insert(r.tri, pts, {1, 2}, {kNoHint}, r.stats), UsageError);
+  PointSet fewer;
+  fewer.xyz.assign(pts.xyz.begin(), pts.xyz.begin() + 30);
+  const std::size_t tets = r.tri.num_tets();
+  EXPECT_THROW(delaunay_insert(r.tri, fewer, {}, {}, r.stats), UsageError);
+  EXPECT_EQ(r.tri.num_tets(), tets);  // left unchanged
+}
+
 TEST(Delaunay, DuplicatesAreReportedAndSkipped) {
   PointSet pts = generate_points(Distribution::cube, 500, 5);
   const std::size_t n = pts.size();
