@@ -4,6 +4,7 @@
 #   bash tools/setup.sh demo    install + build + mesh a shipped sample (README command 1)
 #   bash tools/setup.sh test    install + build + run the whole test suite (README command 2)
 #   bash tools/setup.sh sanitize  install + build with ASan/UBSan (CMake preset "sanitize") + run all tests
+#   bash tools/setup.sh fuzz    install + run each libFuzzer target FUZZ_SECONDS (default 60) s
 #   bash tools/setup.sh build   install + build only
 #   bash tools/setup.sh deps    install only
 #
@@ -20,10 +21,12 @@ JOBS="${JOBS:-$(nproc)}"
 # One package per line; keep sorted. Everything the build, the tests and the tools need.
 PACKAGES=(
   build-essential
+  clang
   cmake
   gnuplot-nox
   libbenchmark-dev
   libcgal-dev
+  libclang-rt-14-dev
   libcli11-dev
   libeigen3-dev
   libfmt-dev
@@ -74,6 +77,11 @@ case "$goal" in
     cmake --build --preset sanitize -j "$JOBS"
     ctest --preset sanitize -j "$JOBS"
     ;;
+  fuzz)
+    # Each libFuzzer target for FUZZ_SECONDS (default 60) under ASan + UBSan (issue 6).
+    install_deps
+    bash tests/fuzz/run.sh "${FUZZ_SECONDS:-60}"
+    ;;
   demo)
     install_deps; build
     mkdir -p out
@@ -81,5 +89,5 @@ case "$goal" in
     "$BUILD_DIR/kdmesh" delaunay out/cube-200k.xyz --order kd-bfs --check -o out/cube-200k.vtu
     echo "setup: wrote out/cube-200k.vtu"
     ;;
-  *) echo "usage: bash tools/setup.sh {demo|test|sanitize|build|deps}" >&2; exit 2 ;;
+  *) echo "usage: bash tools/setup.sh {demo|test|sanitize|fuzz|build|deps}" >&2; exit 2 ;;
 esac

@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# kdmesh fuzzing — build every libFuzzer target with clang (ASan + UBSan) and run each one.
+#   bash tests/fuzz/run.sh [SECONDS_PER_TARGET=60] [TARGET ...]
+# Builds into build-fuzz/, runs on a scratch copy of the committed seed corpus
+# (tests/fuzz/corpus/<target>/), so new inputs never dirty the repository. Any crash,
+# sanitizer report, untyped exception, hang (>10 s per input) or allocation over 512 MB is a
+# finding: the reproducer is saved to build-fuzz/findings/<target>/ and the script exits 1.
+# Longer runs: the same command with more seconds (docs/robustness.md).
+# SPDX-License-Identifier: AGPL-3.0-or-later
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+SECONDS_PER_TARGET="${1:-60}"
+shift || true
+OUT=build-fuzz
+mkdir -p "$OUT"
+CXX="${FUZZ_CXX:-clang++}"
+FLAGS=(-std=c++20 -O1 -g -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefined
+       -fno-sanitize-recover=undefined -I. -DKDMESH_FUZZ)
+CORE=(core/atomic_file.cpp core/point_set.cpp)
+
+# target : sources (besides the target file and core) : libraries
+declare -A SOURCES=(
+  [xyz]="io/points_io.cpp"
+  [node]="io/points_io.cpp"
+  [ply_points]="io/points_io.cpp"
+)
+declare -A LIBS=(
+  [xyz]=""
+  [node]=""
+  [ply_points]=""
+)
+# Targets whose sources exist in this tree (surface readers and the YAML loader are added
+# here as they land).
+[ -f tests/fuzz/fuzz_stl.cpp ] && SOURCES[stl]="io/surface_io.cpp" && LIBS[stl]="${SURFACE_LIBS:--lOpenMeshCore}"
+[ -f tests/fuzz/fuzz_ply_surface.cpp ] && SOURCES[ply_surface]="io/surface_io.cpp" && LIBS[ply_surface]="${SURFACE_LIBS:--lOpenMeshCore}"
+[ -f tests/fuzz/fuzz_config.cpp ] && SOURCES[config]="tools/lib/job_config.cpp" && LIBS[config]="-lyaml-cpp"
+
+targets=("$@")
+[ ${#targets[@]} -eq 0 ] && targets=($(printf '%s\n' "${!SOURCES[@]}" | sort))
+command -v "$CXX" >/dev/null || { echo "fuzz: $CXX not found (apt-get install clang libclang-rt-14-dev)" >&2; exit 2; }
+
+status=0
+for t in "${targets[@]}"; do
+  [ -n "${SOURCES[$t]+x}" ] || { echo "fuzz: unknown target '$t'" >&2; exit 2; }
+  exe="$OUT/fuzz_$t"
+  echo "fuzz: building $t"
+  # shellcheck disable=SC2086
+  "$CXX" "${FLAGS[@]}" "tests/fuzz/fuzz_$t.cpp" ${SOURCES[$t]} "${CORE[@]}" ${LIBS[$t]} -o "$exe"
+  work="$OUT/corpus/$t"
+  rm -rf "$work"
+  mkdir -p "$work" "$OUT/findings/$t" "$OUT/tmp"
+  cp tests/fuzz/corpus/"$t"/* "$work"/ 2>/dev/null || true
+  echo "fuzz: running $t for ${SECONDS_PER_TARGET}s"
+  if ! KDMESH_FUZZ_TMP="$OUT/tmp" "$exe" "$work" -max_total_time="$SECONDS_PER_TARGET" \
+        -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=512 -max_len=65536 \
+        -artifact_prefix="$OUT/findings/$t/" -print_final_stats=1 > "$OUT/$t.log" 2>&1; then
+    echo "fuzz: FINDING in $t (log: $OUT/$t.log, reproducer in $OUT/findings/$t/)" >&2
+    tail -n 40 "$OUT/$t.log" >&2
+    status=1
+  else
+    grep -E "stat::number_of_executed_units|stat::new_units_added" "$OUT/$t.log" | tr '\n' ' '
+    echo
+  fi
+done
+exit $status
