@@ -26,6 +26,12 @@ class AtomicFile {
   std::string path_;
   std::string temp_;
   bool committed_ = false;
+  int slot_ = -1;  ///< registration for remove_temporaries_on_signal()
 };
+
+/// Installs SIGINT and SIGTERM handlers that remove every temporary file of a live
+/// AtomicFile, then die of the signal as usual (exit status 128 + signal). So an interrupted
+/// run leaves neither a partial output nor a stray temporary file. Executables call it once.
+void remove_temporaries_on_signal();
 
 }  // namespace kdmesh
