@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <bit>
 #include <charconv>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -159,23 +158,17 @@ TEST(Xyz, WriteErrors) {
   EXPECT_FALSE(fs::exists(path));
 }
 
-TEST(Xyz, MillionPointsTiming) {
+// A million points round-trip bit for bit (speed belongs to benchmarks, not to this test).
+TEST(Xyz, MillionPointsRoundTrip) {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   PointSet p;
   p.xyz.resize(3'000'000);
   for (double& x : p.xyz) x = u(rng);
   const std::string path = scratch(".xyz");
-  using clock = std::chrono::steady_clock;
-  const auto t0 = clock::now();
   write_xyz(p, path);
-  const auto t1 = clock::now();
   const PointSet q = read_xyz(path);
-  const auto t2 = clock::now();
   EXPECT_TRUE(q.xyz == p.xyz);  // == on doubles; no -0.0 or NaN in a uniform sample
-  std::printf("[ timing ] write_xyz 1M points: %.3f s, read_xyz: %.3f s, %.1f MB\n",
-              std::chrono::duration<double>(t1 - t0).count(),
-              std::chrono::duration<double>(t2 - t1).count(), double(fs::file_size(path)) / 1e6);
   fs::remove(path);
 }
 
@@ -437,10 +430,9 @@ TEST(Ply, ImplausibleCountFailsFastWithoutAllocating) {
     const std::string path =
         write_file(".ply", "ply\nformat " + fmt + " 1.0\nelement vertex 4000000000\n" + props +
                                "end_header\n" + std::string(240, fmt == "ascii" ? '1' : '\0'));
-    const auto t0 = std::chrono::steady_clock::now();
-    // An allocation of 4e9 points would throw std::bad_alloc (or take seconds), not InputError.
+    // Reading 4e9 points would throw std::bad_alloc (or allocate 96 GB), not this InputError
+    // from the header check; the fuzz targets also run with -malloc_limit_mb=512.
     expect_input_error([&] { read_ply_points(path); }, path, 3, "declares 4000000000 records");
-    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
   }
   // The same for an element before the vertices.
   const std::string path =
