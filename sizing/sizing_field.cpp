@@ -1,25 +1,256 @@
-// kdmesh — sizing field (STUB: uniform max_size; the real implementation replaces this file).
+// kdmesh — the sizing field h(x): validation of the zones, and fast evaluation
+// (one BVH over every segment-like zone piece, plus closed-form boxes, balls and plane sections).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "sizing/sizing_field.h"
 
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
 #include "core/error.h"
+#include "sizing/features.h"
+#include "sizing/plane_section.h"
+#include "sizing/segment_bvh.h"
 
 namespace kdmesh {
+namespace {
 
-struct SizingField::Impl {
-  SizingOptions options;
+const char* kind_name(SizingZone::Kind k) {
+  switch (k) {
+    case SizingZone::Kind::sharp_edges: return "sharp_edges";
+    case SizingZone::Kind::polyline: return "polyline";
+    case SizingZone::Kind::segment: return "segment";
+    case SizingZone::Kind::plane: return "plane";
+    case SizingZone::Kind::point: return "point";
+    case SizingZone::Kind::box: return "box";
+    case SizingZone::Kind::ball: return "ball";
+  }
+  return "unknown";
+}
+
+[[noreturn]] void zone_error(std::size_t i, const SizingZone& z, const std::string& msg) {
+  std::ostringstream os;
+  os << "sizing zone " << i << " '" << z.name << "' (" << kind_name(z.kind) << "): " << msg;
+  throw UsageError(os.str());
+}
+
+struct PlaneZone {
+  double origin[3], normal[3], u[3], v[3];
+  double size;
+  SectionLocator locator;
 };
 
-double SizingField::operator()(const double*) const { return impl_->options.max_size; }
-double SizingField::max_size() const { return impl_->options.max_size; }
-double SizingField::min_size() const { return impl_->options.min_size; }
-const SizingOptions& SizingField::options() const { return impl_->options; }
+struct BoxZone {
+  double lo[3], hi[3];
+  double size;
+};
 
-SizingField build_sizing_field(const SurfaceMesh&, const SizingOptions& options) {
-  if (!(options.max_size > 0)) throw UsageError("sizing: max_size must be > 0");
+struct BallZone {
+  double c[3];
+  double r;
+  double size;
+};
+
+}  // namespace
+
+struct SizingField::Impl {
+  SizingOptions options;  // min_size resolved (never 0)
+  double g = 0;
+  double h_min = 0, h_max = 0;
+  SegmentBvh segments;  // sharp edges, polylines, segments, points, plane-section boundaries
+  std::vector<PlaneZone> planes;
+  std::vector<BoxZone> boxes;
+  std::vector<BallZone> balls;
+
+  double eval(const double* x) const {
+    double best = h_max;
+    for (const BoxZone& b : boxes) {
+      if (!(b.size < best)) continue;
+      double d2 = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double e = std::max({b.lo[k] - x[k], 0.0, x[k] - b.hi[k]});
+        d2 += e * e;
+      }
+      best = std::min(best, b.size + g * std::sqrt(d2));
+    }
+    for (const BallZone& b : balls) {
+      if (!(b.size < best)) continue;
+      const double dx = x[0] - b.c[0], dy = x[1] - b.c[1], dz = x[2] - b.c[2];
+      const double d = std::max(0.0, std::sqrt(dx * dx + dy * dy + dz * dz) - b.r);
+      best = std::min(best, b.size + g * d);
+    }
+    // Plane sections: the interior term only (size + g|dz| when x projects into the region);
+    // outside, the distance is to the boundary curve, whose segments are in the BVH.
+    for (const PlaneZone& p : planes) {
+      const double r[3] = {x[0] - p.origin[0], x[1] - p.origin[1], x[2] - p.origin[2]};
+      const double dz = r[0] * p.normal[0] + r[1] * p.normal[1] + r[2] * p.normal[2];
+      const double value = p.size + g * std::fabs(dz);
+      if (!(value < best)) continue;
+      const double pu = r[0] * p.u[0] + r[1] * p.u[1] + r[2] * p.u[2];
+      const double pv = r[0] * p.v[0] + r[1] * p.v[1] + r[2] * p.v[2];
+      if (p.locator.contains(pu, pv)) best = value;
+    }
+    best = segments.min_value(x, g, best);
+    return std::max(h_min, std::min(h_max, best));
+  }
+};
+
+namespace {
+[[noreturn]] void empty_field() {
+  throw UsageError("sizing: the SizingField is empty (default-constructed; use build_sizing_field)");
+}
+}  // namespace
+
+double SizingField::operator()(const double* x) const {
+  if (!impl_) empty_field();
+  return impl_->eval(x);
+}
+double SizingField::max_size() const {
+  if (!impl_) empty_field();
+  return impl_->h_max;
+}
+double SizingField::min_size() const {
+  if (!impl_) empty_field();
+  return impl_->h_min;
+}
+const SizingOptions& SizingField::options() const {
+  if (!impl_) empty_field();
+  return impl_->options;
+}
+
+SizingField build_sizing_field(const SurfaceMesh& surface, const SizingOptions& options) {
+  auto finite = [](double v) { return std::isfinite(v); };
+  if (!(options.max_size > 0) || !finite(options.max_size))
+    throw UsageError("sizing: max_size must be finite and > 0 (got " +
+                     std::to_string(options.max_size) + ")");
+  if (!(options.min_size >= 0) || !finite(options.min_size))
+    throw UsageError("sizing: min_size must be finite and >= 0 (got " +
+                     std::to_string(options.min_size) + ")");
+  if (options.min_size > options.max_size)
+    throw UsageError("sizing: min_size " + std::to_string(options.min_size) +
+                     " is larger than max_size " + std::to_string(options.max_size));
+  if (!(options.gradation > 0) || !finite(options.gradation))
+    throw UsageError("sizing: gradation must be finite and > 0 (got " +
+                     std::to_string(options.gradation) + ")");
+  if (options.curvature_angle_deg != 0)
+    throw UsageError(
+        "sizing: curvature_angle_deg (curvature-bounded size) is not implemented; leave it 0");
+
   auto impl = std::make_shared<SizingField::Impl>();
   impl->options = options;
-  if (impl->options.min_size <= 0) impl->options.min_size = options.max_size / 1000;
+  if (impl->options.min_size == 0) impl->options.min_size = options.max_size / 1000;
+  impl->g = options.gradation;
+  impl->h_max = options.max_size;
+  impl->h_min = impl->options.min_size;
+
+  bool surface_checked = false;
+  auto check_surface = [&](std::size_t i, const SizingZone& z) {
+    if (surface_checked) return;
+    const std::size_t bad = first_non_finite(surface.points);
+    if (bad != surface.points.size())
+      zone_error(i, z, "surface point " + std::to_string(bad) + " has a non-finite coordinate");
+    surface_checked = true;
+  };
+
+  WeightedSegments segs;
+  for (std::size_t i = 0; i < options.zones.size(); ++i) {
+    const SizingZone& z = options.zones[i];
+    const std::vector<double>& c = z.coords;
+    if (!(z.size > 0) || !finite(z.size))
+      zone_error(i, z, "size must be finite and > 0 (got " + std::to_string(z.size) + ")");
+    for (std::size_t k = 0; k < c.size(); ++k)
+      if (!finite(c[k])) zone_error(i, z, "coordinate " + std::to_string(k) + " is not finite");
+    auto need = [&](std::size_t n, const char* what) {
+      if (c.size() != n)
+        zone_error(i, z, "expects " + std::to_string(n) + " coordinates (" + what + "), got " +
+                             std::to_string(c.size()));
+    };
+    switch (z.kind) {
+      case SizingZone::Kind::sharp_edges: {
+        if (!c.empty()) zone_error(i, z, "takes no coordinates");
+        if (!(z.angle_deg > 0 && z.angle_deg < 180))
+          zone_error(i, z, "angle_deg must be in (0, 180) (got " + std::to_string(z.angle_deg) + ")");
+        check_surface(i, z);
+        const FeatureEdges fe = detect_sharp_edges(surface, z.angle_deg);
+        for (std::size_t e = 0; e < fe.num_edges(); ++e)
+          segs.push_back(surface.points.p(fe.edges[2 * e]), surface.points.p(fe.edges[2 * e + 1]),
+                         z.size);
+        break;
+      }
+      case SizingZone::Kind::polyline: {
+        if (c.size() < 6 || c.size() % 3 != 0)
+          zone_error(i, z, "expects 3*k coordinates with k >= 2 vertices, got " +
+                               std::to_string(c.size()));
+        for (std::size_t k = 0; k + 1 < c.size() / 3; ++k) {
+          const double* a = c.data() + 3 * k;
+          const double* b = a + 3;
+          if (a[0] == b[0] && a[1] == b[1] && a[2] == b[2])
+            zone_error(i, z, "piece " + std::to_string(k) + " (vertices " + std::to_string(k) +
+                                 " and " + std::to_string(k + 1) + ") has zero length");
+          segs.push_back(a, b, z.size);
+        }
+        break;
+      }
+      case SizingZone::Kind::segment: {
+        need(6, "two end points");
+        if (c[0] == c[3] && c[1] == c[4] && c[2] == c[5])
+          zone_error(i, z, "the segment has zero length");
+        segs.push_back(c.data(), c.data() + 3, z.size);
+        break;
+      }
+      case SizingZone::Kind::point: {
+        need(3, "a point");
+        segs.push_back(c.data(), c.data(), z.size);
+        break;
+      }
+      case SizingZone::Kind::plane: {
+        need(6, "origin and normal");
+        const double* n = c.data() + 3;
+        const double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+        if (!(nn > 0) || !finite(nn)) zone_error(i, z, "the normal is zero (or overflows)");
+        check_surface(i, z);
+        const PlaneSection sec = cut_with_plane(surface, c.data(), n);
+        if (sec.empty()) zone_error(i, z, "the plane misses the solid (no surface facet crosses it)");
+        PlaneZone p;
+        for (int k = 0; k < 3; ++k) {
+          p.origin[k] = sec.origin[k];
+          p.normal[k] = sec.normal[k];
+          p.u[k] = sec.u[k];
+          p.v[k] = sec.v[k];
+        }
+        p.size = z.size;
+        p.locator = SectionLocator(sec);
+        impl->planes.push_back(std::move(p));
+        for (std::size_t s = 0; s < sec.num_segments(); ++s)
+          segs.push_back(sec.xyz.data() + 3 * std::size_t(sec.segs[2 * s]),
+                         sec.xyz.data() + 3 * std::size_t(sec.segs[2 * s + 1]), z.size);
+        break;
+      }
+      case SizingZone::Kind::box: {
+        need(6, "min and max corners");
+        BoxZone b;
+        for (int k = 0; k < 3; ++k) {
+          b.lo[k] = c[k];
+          b.hi[k] = c[3 + k];
+          if (b.lo[k] > b.hi[k])
+            zone_error(i, z, std::string("min ") + "xyz"[k] + " = " + std::to_string(b.lo[k]) +
+                                 " is larger than max " + "xyz"[k] + " = " + std::to_string(b.hi[k]));
+        }
+        b.size = z.size;
+        impl->boxes.push_back(b);
+        break;
+      }
+      case SizingZone::Kind::ball: {
+        need(4, "center and radius");
+        if (!(c[3] > 0)) zone_error(i, z, "radius must be > 0 (got " + std::to_string(c[3]) + ")");
+        impl->balls.push_back({{c[0], c[1], c[2]}, c[3], z.size});
+        break;
+      }
+      default:
+        zone_error(i, z, "unknown zone kind " + std::to_string(int(z.kind)));
+    }
+  }
+  impl->segments = SegmentBvh(segs);
   return SizingField(impl);
 }
 

@@ -37,6 +37,7 @@ struct SizingOptions {
   std::vector<SizingZone> zones;
   /// Optional curvature bound: the size on curved surface parts is at most
   /// curvature_angle_deg (radians of it) times the local radius of curvature; 0 = off.
+  /// Not implemented yet: build_sizing_field throws UsageError when it is not 0.
   double curvature_angle_deg = 0;
 };
 

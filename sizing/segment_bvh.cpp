@@ -1,0 +1,208 @@
+// kdmesh — bounding-volume hierarchy over weighted segments: min over i of (w_i + g·d(x, s_i)).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "sizing/segment_bvh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "core/error.h"
+
+namespace kdmesh {
+
+double segment_distance(const double* x, const double* a, const double* b) {
+  const double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double xa[3] = {x[0] - a[0], x[1] - a[1], x[2] - a[2]};
+  const double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+  double t = dd > 0 ? (xa[0] * d[0] + xa[1] * d[1] + xa[2] * d[2]) / dd : 0;
+  t = std::clamp(t, 0.0, 1.0);
+  const double r[3] = {xa[0] - t * d[0], xa[1] - t * d[1], xa[2] - t * d[2]};
+  return std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+}
+
+namespace {
+
+constexpr std::size_t kLeaf = 8;
+constexpr int kMedianDepth = 48;
+constexpr int kStack = 128;
+constexpr std::uint32_t kCountBits = 5;
+constexpr std::uint32_t kCountMask = (1u << kCountBits) - 1;
+
+/// The largest float <= v (round_up: the smallest float >= v). Beyond the float range this
+/// gives +-FLT_MAX or +-inf on the correct side, so the result is still a bound.
+float round_down(double v) {
+  float f = float(v);
+  if (double(f) > v) f = std::nextafter(f, -INFINITY);
+  return f;
+}
+float round_up(double v) {
+  float f = float(v);
+  if (double(f) < v) f = std::nextafter(f, INFINITY);
+  return f;
+}
+
+}  // namespace
+
+SegmentBvh::SegmentBvh(const WeightedSegments& in) {
+  const std::size_t n = in.size();
+  if (n == 0) return;
+  if (n >= (std::size_t(1) << (32 - kCountBits)))
+    throw UsageError("sizing: too many zone segments (" + std::to_string(n) + "; at most 2^27)");
+  std::vector<std::uint32_t> ids(n);
+  std::vector<double> centroid(3 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    ids[i] = std::uint32_t(i);
+    for (int k = 0; k < 3; ++k) centroid[3 * i + k] = 0.5 * (in.ab[6 * i + k] + in.ab[6 * i + 3 + k]);
+  }
+  nodes_.reserve(n / 2 + 4);
+  segs_.reserve(n);
+  nodes_.resize(2);  // the root, and an unused slot so that sibling pairs start at even indices
+  build(ids, centroid, in, 0, n, 0, 0);
+}
+
+void SegmentBvh::build(std::vector<std::uint32_t>& ids, const std::vector<double>& centroid,
+                       const WeightedSegments& in, std::size_t begin, std::size_t end,
+                       std::size_t slot, int depth) {
+  depth_ = std::max(depth_, depth);
+  double lo[3], hi[3], clo[3], chi[3], wmin = INFINITY;
+  for (int k = 0; k < 3; ++k) {
+    lo[k] = clo[k] = INFINITY;
+    hi[k] = chi[k] = -INFINITY;
+  }
+  for (std::size_t i = begin; i < end; ++i) {
+    const std::size_t s = ids[i];
+    for (int k = 0; k < 3; ++k) {
+      const double a = in.ab[6 * s + k], b = in.ab[6 * s + 3 + k];
+      lo[k] = std::min({lo[k], a, b});
+      hi[k] = std::max({hi[k], a, b});
+      clo[k] = std::min(clo[k], centroid[3 * s + k]);
+      chi[k] = std::max(chi[k], centroid[3 * s + k]);
+    }
+    wmin = std::min(wmin, in.weight[s]);
+  }
+  Node node;
+  for (int k = 0; k < 3; ++k) {
+    node.lo[k] = round_down(lo[k]);
+    node.hi[k] = round_up(hi[k]);
+  }
+  node.wmin = round_down(wmin);
+  int axis = 0;
+  for (int k = 1; k < 3; ++k)
+    if (chi[k] - clo[k] > chi[axis] - clo[axis]) axis = k;
+  if (end - begin <= kLeaf || !(chi[axis] > clo[axis])) {
+    // Leaf (also when every centroid coincides: no split would separate them). Such a leaf
+    // may exceed kLeaf; split it by count then, so that the count fits its bits.
+    if (end - begin > kCountMask) {
+      const std::size_t mid = begin + (end - begin) / 2;
+      const std::size_t c = nodes_.size();
+      nodes_.resize(c + 2);
+      build(ids, centroid, in, begin, mid, c, depth + 1);
+      build(ids, centroid, in, mid, end, c + 1, depth + 1);
+      node.link = std::uint32_t(c) << kCountBits;
+      nodes_[slot] = node;
+      return;
+    }
+    node.link = (std::uint32_t(segs_.size()) << kCountBits) | std::uint32_t(end - begin);
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::size_t s = ids[i];
+      Seg g;
+      double dd = 0;
+      for (int k = 0; k < 3; ++k) {
+        g.a[k] = in.ab[6 * s + k];
+        g.d[k] = in.ab[6 * s + 3 + k] - g.a[k];
+        dd += g.d[k] * g.d[k];
+      }
+      g.inv_dd = dd > 0 ? 1 / dd : 0;
+      g.w = in.weight[s];
+      segs_.push_back(g);
+    }
+    nodes_[slot] = node;
+    return;
+  }
+  // Split at the middle of the centroids' longest extent (tighter boxes than a median split on
+  // clustered input); at depth >= kMedianDepth, or when one side would be empty, split at the
+  // median instead, which bounds the depth by kMedianDepth + log2(n).
+  std::size_t mid = begin;
+  if (depth < kMedianDepth) {
+    const double split = 0.5 * (clo[axis] + chi[axis]);
+    const auto it = std::partition(
+        ids.begin() + std::ptrdiff_t(begin), ids.begin() + std::ptrdiff_t(end),
+        [&](std::uint32_t p) { return centroid[3 * std::size_t(p) + axis] < split; });
+    mid = std::size_t(it - ids.begin());
+  }
+  if (mid == begin || mid == end) {
+    mid = begin + (end - begin) / 2;
+    std::nth_element(ids.begin() + std::ptrdiff_t(begin), ids.begin() + std::ptrdiff_t(mid),
+                     ids.begin() + std::ptrdiff_t(end), [&](std::uint32_t p, std::uint32_t q) {
+                       const double cp = centroid[3 * std::size_t(p) + axis];
+                       const double cq = centroid[3 * std::size_t(q) + axis];
+                       return cp != cq ? cp < cq : p < q;  // total order: deterministic
+                     });
+  }
+  const std::size_t c = nodes_.size();
+  nodes_.resize(c + 2);
+  build(ids, centroid, in, begin, mid, c, depth + 1);
+  build(ids, centroid, in, mid, end, c + 1, depth + 1);
+  node.link = std::uint32_t(c) << kCountBits;
+  nodes_[slot] = node;
+}
+
+double SegmentBvh::min_value(const double* x, double g, double best) const {
+  if (nodes_.empty()) return best;
+  const double inv_g = 1 / g;
+  // Squared distance from x to a node's box, in double (the float bounds convert exactly).
+  auto box_d2 = [x](const Node& n) {
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double e = std::max(double(n.lo[k]) - x[k], x[k] - double(n.hi[k]));
+      d2 += e > 0 ? e * e : 0.0;
+    }
+    return d2;
+  };
+  // Could anything below a node beat best? (w_min + g·dist >= best <=> dist >= (best-w_min)/g.)
+  auto may_improve = [&](double wmin, double d2) {
+    const double r = (best - wmin) * inv_g;
+    return r > 0 && d2 < r * r;
+  };
+  // The stack holds at most one pending sibling per level plus one: depth <= kMedianDepth +
+  // log2(2^27) + 1 (the count split of oversized leaves adds at most log2 too), < kStack.
+  std::uint32_t stack[kStack];
+  double stack_d2[kStack];
+  int sp = 0;
+  stack[sp] = 0;
+  stack_d2[sp++] = box_d2(nodes_[0]);
+  while (sp > 0) {
+    --sp;
+    const Node& n = nodes_[stack[sp]];
+    if (!may_improve(n.wmin, stack_d2[sp])) continue;  // best may have dropped since the push
+    const std::uint32_t count = n.link & kCountMask, first = n.link >> kCountBits;
+    if (count > 0) {
+      for (std::uint32_t i = first; i < first + count; ++i) {
+        const Seg& s = segs_[i];
+        const double xa[3] = {x[0] - s.a[0], x[1] - s.a[1], x[2] - s.a[2]};
+        double t = (xa[0] * s.d[0] + xa[1] * s.d[1] + xa[2] * s.d[2]) * s.inv_dd;
+        t = std::clamp(t, 0.0, 1.0);
+        const double r[3] = {xa[0] - t * s.d[0], xa[1] - t * s.d[1], xa[2] - t * s.d[2]};
+        const double d2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+        const double lim = (best - s.w) * inv_g;
+        if (lim > 0 && d2 < lim * lim) best = std::min(best, s.w + g * std::sqrt(d2));
+      }
+      continue;
+    }
+    const Node& l = nodes_[first];
+    const Node& r = nodes_[first + 1];
+    const double dl = box_d2(l), dr = box_d2(r);
+    const bool l_ok = may_improve(l.wmin, dl), r_ok = may_improve(r.wmin, dr);
+    // Push the farther child first so that the nearer one is visited first.
+    if (dl <= dr) {
+      if (r_ok) { stack[sp] = first + 1; stack_d2[sp++] = dr; }
+      if (l_ok) { stack[sp] = first; stack_d2[sp++] = dl; }
+    } else {
+      if (l_ok) { stack[sp] = first; stack_d2[sp++] = dl; }
+      if (r_ok) { stack[sp] = first + 1; stack_d2[sp++] = dr; }
+    }
+  }
+  return best;
+}
+
+}  // namespace kdmesh

@@ -1,0 +1,605 @@
+// kdmesh — tests of the sizing field, plane sections and sharp-feature detection (sizing/ only).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/error.h"
+#include "sizing/features.h"
+#include "sizing/plane_section.h"
+#include "sizing/segment_bvh.h"
+#include "sizing/sizing_field.h"
+
+namespace kdmesh {
+namespace {
+
+using Kind = SizingZone::Kind;
+
+// ---- surfaces built in code -------------------------------------------------------------
+
+/// A closed prism over a counter-clockwise polygon (x, y pairs) from z0 to z1, outward
+/// oriented. Caps are fans from polygon vertex 0 (so the polygon must be star-shaped from it).
+/// Points: bottom ring 0..n-1, top ring n..2n-1.
+SurfaceMesh prism(const std::vector<double>& xy, double z0, double z1) {
+  SurfaceMesh s;
+  const std::uint32_t n = std::uint32_t(xy.size() / 2);
+  for (std::uint32_t i = 0; i < n; ++i) s.points.push_back(xy[2 * i], xy[2 * i + 1], z0);
+  for (std::uint32_t i = 0; i < n; ++i) s.points.push_back(xy[2 * i], xy[2 * i + 1], z1);
+  auto tri = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+    s.tris.insert(s.tris.end(), {a, b, c});
+  };
+  for (std::uint32_t i = 1; i + 1 < n; ++i) {
+    tri(0, i + 1, i);              // bottom: clockwise seen from +z, so the normal is -z
+    tri(n, n + i, n + i + 1);      // top: counter-clockwise, normal +z
+  }
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t j = (i + 1) % n;
+    // (b_j - b_i) x (t_j - b_i) = h (dy, -dx, 0): the outward side of a CCW polygon edge.
+    tri(i, j, n + j);
+    tri(i, n + j, n + i);
+  }
+  return s;
+}
+
+/// Unit cube [0,1]^3: 12 triangles.
+SurfaceMesh unit_cube() { return prism({0, 0, 1, 0, 1, 1, 0, 1}, 0, 1); }
+
+/// Closed cylinder of radius r, axis z in [0, h], n sides.
+SurfaceMesh cylinder(std::uint32_t n, double r, double h) {
+  std::vector<double> xy;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const double a = 2 * std::numbers::pi * i / n;
+    xy.push_back(r * std::cos(a));
+    xy.push_back(r * std::sin(a));
+  }
+  return prism(xy, 0, h);
+}
+
+/// L-shaped prism: [0,2]x[0,2] minus the notch [1,2]x[1,2], z in [0,1].
+SurfaceMesh l_prism() { return prism({0, 0, 2, 0, 2, 1, 1, 1, 1, 2, 0, 2}, 0, 1); }
+
+bool has_edge(const FeatureEdges& fe, std::uint32_t a, std::uint32_t b) {
+  for (std::size_t e = 0; e < fe.num_edges(); ++e)
+    if (fe.edges[2 * e] == std::min(a, b) && fe.edges[2 * e + 1] == std::max(a, b)) return true;
+  return false;
+}
+
+// ---- detect_sharp_edges -----------------------------------------------------------------
+
+TEST(SharpEdges, CubeHasTwelveEdgesAndEightCorners) {
+  const SurfaceMesh cube = unit_cube();
+  ASSERT_EQ(cube.num_tris(), 12u);
+  const FeatureEdges fe = detect_sharp_edges(cube, 30);
+  // 12 cube edges (dihedral deviation 90°); the 6 face diagonals are flat (0°).
+  EXPECT_EQ(fe.num_edges(), 12u);
+  for (std::size_t e = 0; e < fe.num_edges(); ++e) {
+    const double* a = cube.points.p(fe.edges[2 * e]);
+    const double* b = cube.points.p(fe.edges[2 * e + 1]);
+    int differing = 0;
+    for (int k = 0; k < 3; ++k) differing += a[k] != b[k];
+    EXPECT_EQ(differing, 1) << "edge " << e << " is a diagonal";
+  }
+  for (std::size_t e = 0; e + 1 < fe.num_edges(); ++e) {
+    const auto p = std::make_pair(fe.edges[2 * e], fe.edges[2 * e + 1]);
+    const auto q = std::make_pair(fe.edges[2 * e + 2], fe.edges[2 * e + 3]);
+    EXPECT_LT(p, q);
+    EXPECT_LT(p.first, p.second);
+  }
+  // Every vertex has 3 feature edges: 8 corners, sorted.
+  EXPECT_EQ(fe.corners, (std::vector<std::uint32_t>{0, 1, 2, 3, 4, 5, 6, 7}));
+}
+
+TEST(SharpEdges, ThresholdAtExactlyTheAngleIsAFeature) {
+  const SurfaceMesh cube = unit_cube();
+  // Cube normals are axis vectors: their dot product is exactly 0, so the deviation is
+  // atan2(|n1 x n2|, 0) = pi/2 exactly, and 90/180*pi = 0.5*pi is pi/2 exactly too.
+  EXPECT_EQ(detect_sharp_edges(cube, 90).num_edges(), 12u);
+  EXPECT_EQ(detect_sharp_edges(cube, 90.0001).num_edges(), 0u);
+  EXPECT_TRUE(detect_sharp_edges(cube, 90.0001).corners.empty());
+  // Out-of-range thresholds select nothing.
+  EXPECT_EQ(detect_sharp_edges(cube, 0).num_edges(), 0u);
+  EXPECT_EQ(detect_sharp_edges(cube, 180).num_edges(), 0u);
+  EXPECT_EQ(detect_sharp_edges(cube, NAN).num_edges(), 0u);
+
+  // Two facets sharing edge 0-1 with normals (0,0,1) and (0,1,1): deviation 45° exactly.
+  // (1,0,0)x(0,1,0) = (0,0,1); (A-B)x(D-B) = (-1,0,0)x(-1,-1,1) = (0,1,1). atan2(1, 1) = pi/4,
+  // and 45/180*pi = 0.25*pi, both the double nearest pi/4.
+  SurfaceMesh hinge;
+  hinge.points.push_back(0, 0, 0);   // A
+  hinge.points.push_back(1, 0, 0);   // B
+  hinge.points.push_back(0, 1, 0);   // C
+  hinge.points.push_back(0, -1, 1);  // D
+  hinge.tris = {0, 1, 2, 1, 0, 3};
+  EXPECT_TRUE(has_edge(detect_sharp_edges(hinge, 44.9999), 0, 1));
+  EXPECT_TRUE(has_edge(detect_sharp_edges(hinge, 45), 0, 1));
+  EXPECT_FALSE(has_edge(detect_sharp_edges(hinge, 45.0001), 0, 1));
+  // The 4 boundary edges (one facet each) are features at any threshold.
+  EXPECT_EQ(detect_sharp_edges(hinge, 45.0001).num_edges(), 4u);
+}
+
+TEST(SharpEdges, CylinderAt30DegreesIsExactlyTheTwoRims) {
+  const std::uint32_t n = 48;  // side dihedral 360/48 = 7.5°, rim dihedral 90°
+  const SurfaceMesh cyl = cylinder(n, 1.0, 2.0);
+  const FeatureEdges fe = detect_sharp_edges(cyl, 30);
+  ASSERT_EQ(fe.num_edges(), 2u * n);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    EXPECT_TRUE(has_edge(fe, i, (i + 1) % n)) << "bottom rim " << i;
+    EXPECT_TRUE(has_edge(fe, n + i, n + (i + 1) % n)) << "top rim " << i;
+  }
+  // Each rim point has 2 feature edges turning by 7.5° < 30°: no corners.
+  EXPECT_TRUE(fe.corners.empty());
+  // At 5° the 48 vertical edges (7.5°) join, and every rim point becomes a 3-edge corner.
+  const FeatureEdges fe5 = detect_sharp_edges(cyl, 5);
+  EXPECT_EQ(fe5.num_edges(), 3u * n);
+  EXPECT_EQ(fe5.corners.size(), 2u * n);
+}
+
+TEST(SharpEdges, TurningFeatureLineMakesCorners) {
+  // One open triangle: its 3 boundary edges are features (1 facet each) at any threshold.
+  // Turning angles: at (1,0,0) from (1,0,0) to (-1,1,0): 135°; at (0,1,0) from (-1,1,0) to
+  // (0,-1,0): 135°; at the origin from (0,-1,0) to (1,0,0): 90° (dot product exactly 0).
+  SurfaceMesh t;
+  t.points.push_back(0, 0, 0);
+  t.points.push_back(1, 0, 0);
+  t.points.push_back(0, 1, 0);
+  t.tris = {0, 1, 2};
+  EXPECT_EQ(detect_sharp_edges(t, 100).num_edges(), 3u);
+  EXPECT_EQ(detect_sharp_edges(t, 100).corners, (std::vector<std::uint32_t>{1, 2}));
+  EXPECT_EQ(detect_sharp_edges(t, 90).corners, (std::vector<std::uint32_t>{0, 1, 2}));
+  EXPECT_TRUE(detect_sharp_edges(t, 136).corners.empty());
+}
+
+TEST(SharpEdges, BadInputDoesNotCrash) {
+  SurfaceMesh s = unit_cube();
+  // Flip one facet: its 3 edges are then used twice in the same direction -> features.
+  std::swap(s.tris[1], s.tris[2]);
+  const FeatureEdges flipped = detect_sharp_edges(s, 30);
+  EXPECT_TRUE(has_edge(flipped, s.tris[0], s.tris[1]));
+  EXPECT_TRUE(has_edge(flipped, s.tris[1], s.tris[2]));
+  EXPECT_TRUE(has_edge(flipped, s.tris[0], s.tris[2]));
+  // A non-manifold edge (3 facets), a degenerate facet, an out-of-range id, empty input.
+  SurfaceMesh fan;
+  fan.points.push_back(0, 0, 0);
+  fan.points.push_back(1, 0, 0);
+  fan.points.push_back(0, 1, 0);
+  fan.points.push_back(0, -1, 0);
+  fan.points.push_back(0, 0, 1);
+  fan.tris = {0, 1, 2, 1, 0, 3, 0, 1, 4, 2, 2, 3, 0, 1, 99};
+  const FeatureEdges fe = detect_sharp_edges(fan, 30);
+  EXPECT_TRUE(has_edge(fe, 0, 1));
+  EXPECT_EQ(detect_sharp_edges(SurfaceMesh{}, 30).num_edges(), 0u);
+}
+
+// ---- plane sections ---------------------------------------------------------------------
+
+TEST(PlaneSection, CubeMidPlaneIsTheUnitSquare) {
+  const SurfaceMesh cube = unit_cube();
+  const double o[3] = {0.25, 0.5, 0.5}, n[3] = {0, 0, 2};
+  const PlaneSection sec = cut_with_plane(cube, o, n);
+  // The 8 side triangles are cut; the 4 vertical edges and 4 side diagonals each give a
+  // crossing point, all at z = 0.5.
+  EXPECT_EQ(sec.num_segments(), 8u);
+  for (std::size_t i = 0; i < sec.xyz.size() / 3; ++i) EXPECT_EQ(sec.xyz[3 * i + 2], 0.5);
+  const SectionLocator loc(sec);
+  auto inside = [&](double x, double y) {
+    return loc.contains((x - o[0]) * sec.u[0] + (y - o[1]) * sec.u[1],
+                        (x - o[0]) * sec.v[0] + (y - o[1]) * sec.v[1]);
+  };
+  EXPECT_TRUE(inside(0.5, 0.5));
+  EXPECT_TRUE(inside(0.01, 0.99));
+  EXPECT_FALSE(inside(1.01, 0.5));
+  EXPECT_FALSE(inside(-0.5, -0.5));
+}
+
+TEST(PlaneSection, TouchingPlaneGivesTheFaceEitherWay) {
+  const SurfaceMesh cube = unit_cube();
+  for (const double nz : {1.0, -1.0}) {
+    for (const double z : {0.0, 1.0}) {
+      const double o[3] = {0, 0, z}, n[3] = {0, 0, nz};
+      const PlaneSection sec = cut_with_plane(cube, o, n);
+      EXPECT_FALSE(sec.empty()) << "z " << z << " nz " << nz;
+      const SectionLocator loc(sec);
+      const double pu = (0.5 - o[0]) * sec.u[0] + (0.5 - o[1]) * sec.u[1];
+      const double pv = (0.5 - o[0]) * sec.v[0] + (0.5 - o[1]) * sec.v[1];
+      EXPECT_TRUE(loc.contains(pu, pv)) << "z " << z << " nz " << nz;
+    }
+  }
+  const double o[3] = {0, 0, 1.5}, n[3] = {0, 0, 1};
+  EXPECT_TRUE(cut_with_plane(cube, o, n).empty());
+}
+
+// ---- sizing field: zone by zone, values derived by hand ---------------------------------
+
+SizingOptions opts(double h_max, double g, std::vector<SizingZone> zones) {
+  SizingOptions o;
+  o.max_size = h_max;
+  o.gradation = g;
+  o.zones = std::move(zones);
+  return o;
+}
+
+SizingZone zone(Kind kind, double size, std::vector<double> coords, std::string name = "z") {
+  SizingZone z;
+  z.kind = kind;
+  z.size = size;
+  z.coords = std::move(coords);
+  z.name = std::move(name);
+  return z;
+}
+
+double at(const SizingField& h, double x, double y, double z) {
+  const double p[3] = {x, y, z};
+  return h(p);
+}
+
+constexpr double kTol = 1e-12;
+
+TEST(SizingField, NoZonesIsMaxSize) {
+  const SizingField h = build_sizing_field(unit_cube(), opts(2.5, 0.3, {}));
+  EXPECT_EQ(at(h, 0.5, 0.5, 0.5), 2.5);
+  EXPECT_EQ(h.max_size(), 2.5);
+  EXPECT_EQ(h.min_size(), 2.5 / 1000);  // min_size 0 means max_size / 1000
+  EXPECT_EQ(h.options().min_size, 2.5 / 1000);
+}
+
+TEST(SizingField, PointZone) {
+  // h = 0.2 + 0.5 |x - (1,2,3)|, capped at 10.
+  const SizingField h =
+      build_sizing_field(SurfaceMesh{}, opts(10, 0.5, {zone(Kind::point, 0.2, {1, 2, 3})}));
+  EXPECT_NEAR(at(h, 1, 2, 3), 0.2, kTol);
+  EXPECT_NEAR(at(h, 4, 6, 3), 0.2 + 0.5 * 5, kTol);   // |(3,4,0)| = 5
+  EXPECT_NEAR(at(h, 1, 2, -9), 0.2 + 0.5 * 12, kTol);  // 6.2
+  EXPECT_EQ(at(h, 101, 2, 3), 10);                       // 0.2 + 50 > h_max
+}
+
+TEST(SizingField, SegmentZoneBesideAndBeyondEachEnd) {
+  // Segment (0,0,0)-(2,0,0), size 0.1, g 0.5.
+  const SizingField h = build_sizing_field(
+      SurfaceMesh{}, opts(10, 0.5, {zone(Kind::segment, 0.1, {0, 0, 0, 2, 0, 0})}));
+  EXPECT_NEAR(at(h, 1, 3, 4), 0.1 + 0.5 * 5, kTol);   // beside: |(0,3,4)| = 5
+  EXPECT_NEAR(at(h, 5, 4, 0), 0.1 + 0.5 * 5, kTol);   // beyond b: |(3,4,0)| = 5
+  EXPECT_NEAR(at(h, -3, 0, 4), 0.1 + 0.5 * 5, kTol);  // beyond a: |(-3,0,4)| = 5
+  EXPECT_NEAR(at(h, 0.7, 0, 0), 0.1, kTol);           // on it
+}
+
+TEST(SizingField, PolylinePicksTheNearestPiece) {
+  // Pieces (0,0,0)-(2,0,0) and (2,0,0)-(2,2,0), size 0.1, g 0.5.
+  const SizingField h = build_sizing_field(
+      SurfaceMesh{}, opts(10, 0.5, {zone(Kind::polyline, 0.1, {0, 0, 0, 2, 0, 0, 2, 2, 0})}));
+  EXPECT_NEAR(at(h, 3, 1, 0), 0.1 + 0.5 * 1, kTol);   // piece 2 at 1 (piece 1 at sqrt 2)
+  EXPECT_NEAR(at(h, 1, -3, 0), 0.1 + 0.5 * 3, kTol);  // piece 1 at 3 (piece 2 at sqrt 10)
+  EXPECT_NEAR(at(h, 0, 2, 0), 0.1 + 0.5 * 2, kTol);   // both at 2
+}
+
+TEST(SizingField, BoxAndBallAreSolid) {
+  // Box [0,1]^3 size 0.2; ball at the origin, radius 1, size 0.3; g 0.5.
+  const SizingField box = build_sizing_field(
+      SurfaceMesh{}, opts(10, 0.5, {zone(Kind::box, 0.2, {0, 0, 0, 1, 1, 1})}));
+  EXPECT_EQ(at(box, 0.5, 0.5, 0.5), 0.2);
+  EXPECT_EQ(at(box, 1, 0, 0.3), 0.2);
+  EXPECT_NEAR(at(box, 4, 5, 0.5), 0.2 + 0.5 * 5, kTol);  // (3,4,0) from the corner edge
+  EXPECT_NEAR(at(box, 0.5, 0.5, -2), 0.2 + 0.5 * 2, kTol);
+  const SizingField ball = build_sizing_field(
+      SurfaceMesh{}, opts(10, 0.5, {zone(Kind::ball, 0.3, {0, 0, 0, 1})}));
+  EXPECT_EQ(at(ball, 0.3, -0.2, 0.1), 0.3);
+  EXPECT_NEAR(at(ball, 0, 3, 4), 0.3 + 0.5 * (5 - 1), kTol);
+}
+
+TEST(SizingField, PlaneOnTheCube) {
+  // Section of z = 0.5 with the unit cube: the unit square at z = 0.5. size 0.1, g 0.5.
+  for (const double nz : {1.0, -3.0}) {  // the normal's length and sign do not matter
+    const SizingField h = build_sizing_field(
+        unit_cube(), opts(10, 0.5, {zone(Kind::plane, 0.1, {0.2, 0.9, 0.5, 0, 0, nz})}));
+    // Above the interior: 0.1 + 0.5 * |dz|.
+    EXPECT_NEAR(at(h, 0.3, 0.6, 0.9), 0.1 + 0.5 * 0.4, kTol);
+    EXPECT_NEAR(at(h, 0.3, 0.6, 0.5), 0.1, kTol);
+    EXPECT_NEAR(at(h, 0.7, 0.2, -0.5), 0.1 + 0.5 * 1.0, kTol);
+    // Outside the cube beside the section: in-plane distance 0.3, dz 0.4 -> diagonal 0.5.
+    EXPECT_NEAR(at(h, 1.3, 0.5, 0.9), 0.1 + 0.5 * 0.5, kTol);
+    // Beyond a corner, in the plane: |(-0.3,-0.4)| = 0.5.
+    EXPECT_NEAR(at(h, -0.3, -0.4, 0.5), 0.1 + 0.5 * 0.5, kTol);
+  }
+}
+
+TEST(SizingField, PlaneOnTheLPrismUsesTheNotchBoundary) {
+  // Section of z = 0.5: the L = [0,2]x[0,1] ∪ [0,1]x[0,2]. size 0.1, g 0.5.
+  const SizingField h = build_sizing_field(
+      l_prism(), opts(10, 0.5, {zone(Kind::plane, 0.1, {0, 0, 0.5, 0, 0, 1})}));
+  // (1.5,1.5) is in the notch: nearest section point (1.5,1) at 0.5 in-plane; dz 0.3.
+  EXPECT_NEAR(at(h, 1.5, 1.5, 0.8), 0.1 + 0.5 * std::sqrt(0.3 * 0.3 + 0.5 * 0.5), kTol);
+  // (1.8,1.1) in the notch: nearest (1.8,1) at 0.1; dz 0.
+  EXPECT_NEAR(at(h, 1.8, 1.1, 0.5), 0.1 + 0.5 * 0.1, 1e-12);
+  // (0.5,1.5) and (1.5,0.5) are in the L: |dz| only.
+  EXPECT_NEAR(at(h, 0.5, 1.5, 0.8), 0.1 + 0.5 * 0.3, kTol);
+  EXPECT_NEAR(at(h, 1.5, 0.5, 0.2), 0.1 + 0.5 * 0.3, kTol);
+}
+
+TEST(SizingField, SharpEdgesOfTheCube) {
+  // 12 cube edges, size 0.1, g 0.5. From the centre the nearest edges are at
+  // |(0.5, 0.5)| = sqrt(0.5); from (0.5,-1,-1) the edge y = z = 0 is at sqrt 2.
+  SizingZone z = zone(Kind::sharp_edges, 0.1, {});
+  z.angle_deg = 30;
+  const SizingField h = build_sizing_field(unit_cube(), opts(10, 0.5, {z}));
+  EXPECT_NEAR(at(h, 0.5, 0.5, 0.5), 0.1 + 0.5 * std::sqrt(0.5), kTol);
+  EXPECT_NEAR(at(h, 0.5, -1, -1), 0.1 + 0.5 * std::sqrt(2.0), kTol);
+  // The face diagonal (0,0,0)-(1,1,0) is not a feature: its midpoint is 0.5 from the edges.
+  EXPECT_NEAR(at(h, 0.5, 0.5, 0), 0.1 + 0.5 * 0.5, kTol);
+}
+
+TEST(SizingField, MinSizeFloorAndMaxSizeCap) {
+  SizingOptions o = opts(1.0, 0.5, {zone(Kind::point, 0.2, {0, 0, 0})});
+  o.min_size = 0.3;
+  const SizingField h = build_sizing_field(SurfaceMesh{}, o);
+  EXPECT_EQ(at(h, 0, 0, 0), 0.3);                  // 0.2 is below the floor
+  EXPECT_NEAR(at(h, 1, 0, 0), 0.2 + 0.5, kTol);    // 0.7 is between
+  EXPECT_EQ(at(h, 3, 0, 0), 1.0);                  // 1.7 is above the cap
+  EXPECT_EQ(h.min_size(), 0.3);
+}
+
+TEST(SizingField, MinimumOverZones) {
+  // Point (0,0,0) size 1, box [5,6]^3 size 0.1, g 1: at (3,0,0) the point gives 4, the box
+  // (distance |(2,5,5)| = sqrt 54) gives 0.1 + 7.348...; at (5,5,4) the box gives 1.1.
+  const SizingField h = build_sizing_field(
+      SurfaceMesh{},
+      opts(100, 1, {zone(Kind::point, 1, {0, 0, 0}), zone(Kind::box, 0.1, {5, 5, 5, 6, 6, 6})}));
+  EXPECT_NEAR(at(h, 3, 0, 0), 4, kTol);
+  EXPECT_NEAR(at(h, 5, 5, 4), 1.1, kTol);
+}
+
+// ---- validation -------------------------------------------------------------------------
+
+/// Expects build_sizing_field to throw UsageError whose message contains every `parts`.
+void expect_usage_error(const SurfaceMesh& s, const SizingOptions& o,
+                        const std::vector<std::string>& parts) {
+  try {
+    build_sizing_field(s, o);
+    ADD_FAILURE() << "no exception; expected one mentioning " << parts.front();
+  } catch (const UsageError& e) {
+    const std::string what = e.what();
+    for (const std::string& p : parts) EXPECT_NE(what.find(p), std::string::npos) << what;
+  }
+}
+
+TEST(SizingValidation, GlobalOptions) {
+  const SurfaceMesh cube = unit_cube();
+  expect_usage_error(cube, opts(0, 0.3, {}), {"max_size"});
+  expect_usage_error(cube, opts(-1, 0.3, {}), {"max_size"});
+  expect_usage_error(cube, opts(INFINITY, 0.3, {}), {"max_size"});
+  expect_usage_error(cube, opts(1, 0, {}), {"gradation"});
+  expect_usage_error(cube, opts(1, NAN, {}), {"gradation"});
+  SizingOptions o = opts(1, 0.3, {});
+  o.min_size = 2;
+  expect_usage_error(cube, o, {"min_size", "max_size"});
+  o.min_size = -1;
+  expect_usage_error(cube, o, {"min_size"});
+  o.min_size = 0;
+  o.curvature_angle_deg = 10;
+  expect_usage_error(cube, o, {"curvature_angle_deg", "not implemented"});
+}
+
+TEST(SizingValidation, ZonesNamedByIndexAndName) {
+  const SurfaceMesh cube = unit_cube();
+  const SizingZone ok = zone(Kind::point, 0.1, {0, 0, 0}, "fine");
+  auto bad = [&](SizingZone z, const std::string& what) {
+    z.name = "culprit";
+    expect_usage_error(cube, opts(1, 0.3, {ok, z}), {"zone 1", "culprit", what});
+  };
+  bad(zone(Kind::point, 0, {0, 0, 0}), "size");
+  bad(zone(Kind::point, -1, {0, 0, 0}), "size");
+  bad(zone(Kind::point, NAN, {0, 0, 0}), "size");
+  bad(zone(Kind::point, INFINITY, {0, 0, 0}), "size");
+  bad(zone(Kind::point, 0.1, {0, 0}), "coordinates");
+  bad(zone(Kind::point, 0.1, {0, 0, NAN}), "not finite");
+  bad(zone(Kind::segment, 0.1, {1, 2, 3, 1, 2, 3}), "zero length");
+  bad(zone(Kind::segment, 0.1, {1, 2, 3, 1, 2}), "coordinates");
+  bad(zone(Kind::polyline, 0.1, {0, 0, 0, 1, 0, 0, 1, 0, 0}), "piece 1");
+  bad(zone(Kind::polyline, 0.1, {0, 0, 0}), "coordinates");
+  bad(zone(Kind::polyline, 0.1, {0, 0, 0, 1, 0, 0, 1}), "coordinates");
+  bad(zone(Kind::plane, 0.1, {0.5, 0.5, 0.5, 0, 0, 0}), "normal is zero");
+  bad(zone(Kind::plane, 0.1, {0.5, 0.5, 7, 0, 0, 1}), "misses the solid");
+  bad(zone(Kind::plane, 0.1, {0.5, 0.5, 0.5, 0, 0}), "coordinates");
+  bad(zone(Kind::box, 0.1, {0, 0, 0, 1, -1, 1}), "min y");
+  bad(zone(Kind::box, 0.1, {0, 0, 0, 1, 1}), "coordinates");
+  bad(zone(Kind::ball, 0.1, {0, 0, 0, 0}), "radius");
+  bad(zone(Kind::ball, 0.1, {0, 0, 0, -1}), "radius");
+  bad(zone(Kind::ball, 0.1, {0, 0, 0}), "coordinates");
+  SizingZone sharp = zone(Kind::sharp_edges, 0.1, {});
+  sharp.angle_deg = 0;
+  bad(sharp, "angle_deg");
+  sharp.angle_deg = 30;
+  sharp.coords = {1};
+  bad(sharp, "no coordinates");
+  // The plane misses an empty surface, too.
+  expect_usage_error(SurfaceMesh{}, opts(1, 0.3, {zone(Kind::plane, 0.1, {0, 0, 0, 0, 0, 1})}),
+                     {"zone 0", "misses"});
+}
+
+TEST(SizingValidation, EmptyFieldThrowsInsteadOfCrashing) {
+  const SizingField h;
+  const double x[3] = {0, 0, 0};
+  EXPECT_THROW(h(x), UsageError);
+}
+
+// ---- brute-force cross-check ------------------------------------------------------------
+
+/// Independent point-in-region test: parity over every section segment, in (u, v).
+bool brute_inside(const PlaneSection& sec, double pu, double pv) {
+  bool inside = false;
+  for (std::size_t s = 0; s < sec.num_segments(); ++s) {
+    const double* a = sec.uv.data() + 2 * std::size_t(sec.segs[2 * s]);
+    const double* b = sec.uv.data() + 2 * std::size_t(sec.segs[2 * s + 1]);
+    if ((a[1] > pv) == (b[1] > pv)) continue;
+    const double t = (pv - a[1]) / (b[1] - a[1]);
+    if (a[0] + t * (b[0] - a[0]) > pu) inside = !inside;
+  }
+  return inside;
+}
+
+/// The field by its definition: a minimum over every zone piece, no acceleration.
+double brute_force(const SurfaceMesh& surface, const SizingOptions& o, const double* x) {
+  const double g = o.gradation;
+  double best = o.max_size;
+  auto seg = [&](const double* a, const double* b, double size) {
+    best = std::min(best, size + g * segment_distance(x, a, b));
+  };
+  for (const SizingZone& z : o.zones) {
+    const double* c = z.coords.data();
+    switch (z.kind) {
+      case Kind::sharp_edges: {
+        const FeatureEdges fe = detect_sharp_edges(surface, z.angle_deg);
+        for (std::size_t e = 0; e < fe.num_edges(); ++e)
+          seg(surface.points.p(fe.edges[2 * e]), surface.points.p(fe.edges[2 * e + 1]), z.size);
+        break;
+      }
+      case Kind::polyline:
+        for (std::size_t k = 0; k + 1 < z.coords.size() / 3; ++k) seg(c + 3 * k, c + 3 * k + 3, z.size);
+        break;
+      case Kind::segment: seg(c, c + 3, z.size); break;
+      case Kind::point: seg(c, c, z.size); break;
+      case Kind::box: {
+        double d2 = 0;
+        for (int k = 0; k < 3; ++k) {
+          const double e = x[k] < c[k] ? c[k] - x[k] : x[k] > c[3 + k] ? x[k] - c[3 + k] : 0;
+          d2 += e * e;
+        }
+        best = std::min(best, z.size + g * std::sqrt(d2));
+        break;
+      }
+      case Kind::ball: {
+        const double d = std::hypot(x[0] - c[0], x[1] - c[1], x[2] - c[2]) - c[3];
+        best = std::min(best, z.size + g * std::max(0.0, d));
+        break;
+      }
+      case Kind::plane: {
+        const PlaneSection sec = cut_with_plane(surface, c, c + 3);
+        const double r[3] = {x[0] - sec.origin[0], x[1] - sec.origin[1], x[2] - sec.origin[2]};
+        auto dot = [&](const double* w) { return r[0] * w[0] + r[1] * w[1] + r[2] * w[2]; };
+        if (brute_inside(sec, dot(sec.u), dot(sec.v))) {
+          best = std::min(best, z.size + g * std::fabs(dot(sec.normal)));
+        } else {
+          for (std::size_t s = 0; s < sec.num_segments(); ++s)
+            seg(sec.xyz.data() + 3 * std::size_t(sec.segs[2 * s]),
+                sec.xyz.data() + 3 * std::size_t(sec.segs[2 * s + 1]), z.size);
+        }
+        break;
+      }
+    }
+  }
+  const double h_min = o.min_size > 0 ? o.min_size : o.max_size / 1000;
+  return std::max(h_min, std::min(o.max_size, best));
+}
+
+void cross_check(const SurfaceMesh& surface, const SizingOptions& o, const double* lo,
+                 const double* hi, int samples, std::uint64_t seed) {
+  const SizingField h = build_sizing_field(surface, o);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int below_max = 0;
+  for (int i = 0; i < samples; ++i) {
+    double x[3];
+    for (int k = 0; k < 3; ++k) x[k] = lo[k] + (hi[k] - lo[k]) * unit(rng);
+    const double want = brute_force(surface, o, x);
+    const double got = h(x);
+    ASSERT_NEAR(got, want, 1e-12 * want) << "at " << x[0] << " " << x[1] << " " << x[2];
+    below_max += want < o.max_size;
+  }
+  // The check is only meaningful if most samples are inside some zone's reach.
+  EXPECT_GT(below_max, samples / 2);
+}
+
+TEST(SizingCrossCheck, CylinderWithEveryZoneKind) {
+  const SurfaceMesh cyl = cylinder(64, 1.0, 3.0);
+  SizingZone sharp = zone(Kind::sharp_edges, 0.05, {});
+  sharp.angle_deg = 30;
+  SizingOptions o = opts(0.8, 0.4,
+                         {sharp,
+                          zone(Kind::plane, 0.03, {0.1, 0.0, 1.5, 0.3, 0.2, 1.0}),
+                          zone(Kind::plane, 0.07, {0.0, 0.2, 0.0, 1.0, 0.0, 0.1}),
+                          zone(Kind::segment, 0.04, {-1, -1, 0.5, 1, 1, 2.5}),
+                          zone(Kind::polyline, 0.06, {0, 0, 0, 0.5, 0, 1, 0.5, 0.5, 2, 0, 0, 3}),
+                          zone(Kind::point, 0.02, {0.3, -0.4, 2.2}),
+                          zone(Kind::box, 0.09, {-0.2, -0.2, 1.0, 0.2, 0.3, 1.4}),
+                          zone(Kind::ball, 0.08, {0.5, 0.5, 0.5, 0.25})});
+  o.min_size = 0.025;
+  const double lo[3] = {-1.6, -1.6, -0.6}, hi[3] = {1.6, 1.6, 3.6};
+  cross_check(cyl, o, lo, hi, 3000, 7);
+}
+
+TEST(SizingCrossCheck, LPrismPlanesThroughTheNotch) {
+  const SurfaceMesh l = l_prism();
+  const SizingOptions o = opts(1.0, 0.3,
+                               {zone(Kind::plane, 0.05, {0, 0, 0.5, 0, 0, 1}),
+                                zone(Kind::plane, 0.1, {1.2, 0, 0, 1, 0, 0.3}),
+                                zone(Kind::plane, 0.02, {1.5, 1.5, 0.5, 1, 1, 1})});
+  const double lo[3] = {-1, -1, -1}, hi[3] = {3, 3, 2};
+  cross_check(l, o, lo, hi, 3000, 11);
+}
+
+TEST(SizingCrossCheck, ThousandsOfSegmentsExerciseTheBvh) {
+  // A helix polyline of 4000 pieces plus 500 scattered points, sizes varying per zone.
+  std::vector<double> helix;
+  for (int i = 0; i <= 4000; ++i) {
+    const double t = i * 0.01;
+    helix.insert(helix.end(), {std::cos(t), std::sin(t), 0.05 * t});
+  }
+  std::vector<SizingZone> zones = {zone(Kind::polyline, 0.03, helix)};
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1.5, 1.5), w(0.01, 0.5);
+  for (int i = 0; i < 500; ++i) zones.push_back(zone(Kind::point, w(rng), {u(rng), u(rng), 1 + u(rng)}));
+  const double lo[3] = {-2, -2, -0.5}, hi[3] = {2, 2, 2.5};
+  cross_check(SurfaceMesh{}, opts(0.7, 0.6, zones), lo, hi, 400, 5);
+}
+
+TEST(SizingCrossCheck, GeometricallyClusteredPiecesKeepTheTreeShallow) {
+  // Points at x = 2^-i, i = 0..999: a middle split peels off one point per level, so the build
+  // must fall back to median splits (else depth ~1000 would overflow the query stack).
+  std::vector<SizingZone> zones;
+  for (int i = 0; i < 1000; ++i)
+    zones.push_back(zone(Kind::point, 0.01 + 0.001 * (i % 7), {std::ldexp(1.0, -i), 0, 0}));
+  zones.push_back(zone(Kind::segment, 0.02, {0, 0.5, 0, 0, 0.5, 1e-300}));
+  const double lo[3] = {-0.5, -0.5, -0.5}, hi[3] = {1.5, 0.5, 0.5};
+  cross_check(SurfaceMesh{}, opts(0.9, 0.5, zones), lo, hi, 300, 13);
+  const double tiny_lo[3] = {-1e-6, -1e-6, -1e-6}, tiny_hi[3] = {1e-6, 1e-6, 1e-6};
+  cross_check(SurfaceMesh{}, opts(0.9, 0.5, zones), tiny_lo, tiny_hi, 100, 17);
+  WeightedSegments ws;
+  for (int i = 0; i < 1000; ++i) {
+    const double p[3] = {std::ldexp(1.0, -i), 0, 0};
+    ws.push_back(p, p, 1);
+  }
+  const SegmentBvh bvh(ws);
+  // 48 middle-split levels, then median splits of <= 952 points into leaves of <= 8:
+  // ceil(log2(952 / 8)) = 7 more levels, plus one.
+  EXPECT_LE(bvh.depth(), 48 + 7 + 1);
+  EXPECT_GE(bvh.depth(), 48);  // the middle splits did peel (the fallback was needed)
+}
+
+TEST(SizingField, ConcurrentQueriesAgreeWithSerial) {
+  SizingZone sharp = zone(Kind::sharp_edges, 0.05, {});
+  const SurfaceMesh cyl = cylinder(64, 1.0, 3.0);
+  const SizingField h = build_sizing_field(
+      cyl, opts(0.8, 0.4, {sharp, zone(Kind::plane, 0.03, {0, 0, 1.5, 0.3, 0.2, 1.0})}));
+  std::vector<double> pts;
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(-1.5, 1.5);
+  for (int i = 0; i < 20000; ++i) pts.insert(pts.end(), {u(rng), u(rng), 1.5 + u(rng)});
+  std::vector<double> serial(pts.size() / 3), parallel(pts.size() / 3);
+  for (std::size_t i = 0; i < serial.size(); ++i) serial[i] = h(pts.data() + 3 * i);
+  const SizingField copy = h;  // copies share the built state
+  auto run = [&](const SizingField& f, std::size_t begin, std::size_t step) {
+    for (std::size_t i = begin; i < parallel.size(); i += step) parallel[i] = f(pts.data() + 3 * i);
+  };
+  std::thread t0(run, std::cref(h), 0, 2), t1(run, std::cref(copy), 1, 2);
+  t0.join();
+  t1.join();
+  EXPECT_EQ(serial, parallel);
+}
+
+}  // namespace
+}  // namespace kdmesh
