@@ -1,0 +1,48 @@
+// kdmesh — a multi-level hash grid of nodes with local sizes, for spacing (conflict) queries.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <vector>
+
+namespace kdmesh {
+
+/// Nodes p_i with local sizes h_i (> 0). Two nodes conflict when
+///   |p - q| < beta * (h_p + h_q) / 2
+/// (beta given per query). Node i is stored at the level l whose cell size s_l = s0 * 2^l
+/// satisfies s_l <= h_i < 2 s_l (level 0 also takes every h_i < s0), so a query scans a few
+/// cells per non-empty level whatever the size range. Cells live in an open-addressing hash
+/// table keyed by (level, cell ix, iy, iz); each cell is a singly linked list of node ids.
+/// Single-threaded; lengths in model units.
+class SpacingGrid {
+ public:
+  /// lo: a corner below every point that will be inserted (xyz); s0: finest cell size (> 0).
+  SpacingGrid(const double* lo, double s0);
+
+  /// Adds node (p, h); returns its id in this grid (0, 1, 2, ... in insertion order).
+  std::uint32_t insert(const double* p, double h);
+  /// True if some stored node q conflicts with (p, h) for this beta (see above).
+  bool conflicts(const double* p, double h, double beta) const;
+  std::size_t size() const { return h_.size(); }
+  const double* lo() const { return lo_; }
+  double s0() const { return s0_; }
+
+ private:
+  std::uint64_t key(int level, const double* p) const;
+  std::uint64_t key_cells(int level, std::int64_t i, std::int64_t j, std::int64_t k) const;
+  std::uint32_t find(std::uint64_t key) const;  // head node of the cell, or kEmpty
+  void grow();
+  int level_of(double h) const;
+
+  static constexpr std::uint32_t kEmpty = 0xffffffffu;
+  double lo_[3];
+  double s0_;
+  std::vector<double> xyz_;
+  std::vector<double> h_;
+  std::vector<std::uint32_t> next_;    // next node in the same cell
+  std::vector<std::uint64_t> keys_;    // hash table: cell key (0 = empty slot; keys are never 0)
+  std::vector<std::uint32_t> heads_;   // hash table: first node of the cell
+  std::size_t used_ = 0;
+  std::uint32_t level_mask_ = 0;       // bit l set when level l holds a node
+};
+
+}  // namespace kdmesh

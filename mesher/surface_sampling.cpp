@@ -1,0 +1,183 @@
+// kdmesh — Poisson-disk nodes on surface facets.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/surface_sampling.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <vector>
+
+#include <unordered_map>
+
+#include "core/rng.h"
+#include "mesher/predicates.h"
+
+namespace kdmesh {
+
+namespace {
+
+std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t facet) {
+  // Distinct streams per facet: splitmix-style mixing of (seed, facet).
+  std::uint64_t z = seed * 0x9e3779b97f4a7c15ULL + (facet + 1) * 0xd1b54a32d192ed03ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+/// Creases first: nodes at the surface vertices on a crease (an edge whose two facets are
+/// not coplanar, decided exactly), then along each crease at about h steps. Without them a
+/// faceted curved surface (a polygonal cylinder) gets long Delaunay hull edges along its
+/// creases wherever no node happens to lie on them.
+void place_crease_nodes(const SurfaceMesh& surface, const SizingField& sizing,
+                        const SurfaceSamplingOptions& options, SpacingGrid& grid, NodeSet& nodes) {
+  const std::size_t nf = surface.num_tris();
+  std::unordered_map<std::uint64_t, std::uint32_t> first;  // edge -> the facet seen first
+  first.reserve(3 * nf);
+  struct Crease {
+    std::uint32_t a, b, facet;
+  };
+  std::vector<Crease> creases;
+  for (std::size_t f = 0; f < nf; ++f) {
+    const std::uint32_t* t = surface.tri(f);
+    for (int i = 0; i < 3; ++i) {
+      const std::uint32_t a = t[i], b = t[(i + 1) % 3], c = t[(i + 2) % 3];
+      const std::uint64_t key = a < b ? (std::uint64_t(a) << 32 | b) : (std::uint64_t(b) << 32 | a);
+      const auto [it, fresh] = first.emplace(key, std::uint32_t(f));
+      if (fresh) continue;
+      const std::uint32_t* u = surface.tri(it->second);
+      const std::uint32_t d = u[0] != a && u[0] != b ? u[0] : u[1] != a && u[1] != b ? u[1] : u[2];
+      if (pred::orient3d(surface.points.p(a), surface.points.p(b), surface.points.p(c),
+                         surface.points.p(d)) != 0)
+        creases.push_back({std::min(a, b), std::max(a, b), it->second});
+    }
+  }
+  std::sort(creases.begin(), creases.end(), [](const Crease& x, const Crease& y) {
+    return x.a != y.a ? x.a < y.a : x.b < y.b;
+  });
+  auto add = [&](const double* p, std::uint32_t facet) {
+    const double h = sizing(p);
+    if (grid.conflicts(p, h, options.beta)) return;
+    grid.insert(p, h);
+    nodes.push_back(p, NodeKind::surface, facet, float(h));
+  };
+  for (const Crease& c : creases) add(surface.points.p(c.a), c.facet);
+  for (const Crease& c : creases) add(surface.points.p(c.b), c.facet);
+  for (const Crease& c : creases) {
+    const double* a = surface.points.p(c.a);
+    const double* b = surface.points.p(c.b);
+    const double mid[3] = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+    const double len = std::hypot(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
+    const std::int64_t m = std::clamp<std::int64_t>(std::llround(len / sizing(mid)), 1, 1 << 20);
+    for (std::int64_t i = 1; i < m; ++i) {
+      const double t = double(i) / double(m);
+      const double p[3] = {(1 - t) * a[0] + t * b[0], (1 - t) * a[1] + t * b[1],
+                           (1 - t) * a[2] + t * b[2]};
+      add(p, c.facet);
+    }
+  }
+}
+
+}  // namespace
+
+void place_surface_nodes(const SurfaceMesh& surface, const SizingField& sizing,
+                         const SurfaceSamplingOptions& options, SpacingGrid& grid, NodeSet& nodes,
+                         const std::function<void(double)>& progress) {
+  const std::size_t nf = surface.num_tris();
+  place_crease_nodes(surface, sizing, options, grid, nodes);
+  std::vector<double> active;  // (s, t) facet coordinates of the accepted nodes of this facet
+  for (std::size_t f = 0; f < nf; ++f) {
+    if (progress && (f & 1023) == 0) progress(double(f) / double(nf));
+    const std::uint32_t* t = surface.tri(f);
+    const double* a = surface.points.p(t[0]);
+    const double* b = surface.points.p(t[1]);
+    const double* c = surface.points.p(t[2]);
+    // Orthonormal frame of the facet plane: e1 along ab, e2 in-plane perpendicular.
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                         u[0] * v[1] - u[1] * v[0]};
+    const double area2 = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(area2 > 0)) continue;  // degenerate facet: prepared surfaces have none
+    // 2D coordinates of b and c in the frame (a at the origin).
+    const double lu = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    const double e1[3] = {u[0] / lu, u[1] / lu, u[2] / lu};
+    const double e2[3] = {(n[1] * e1[2] - n[2] * e1[1]) / area2,
+                          (n[2] * e1[0] - n[0] * e1[2]) / area2,
+                          (n[0] * e1[1] - n[1] * e1[0]) / area2};
+    const double bx = lu, cx = v[0] * e1[0] + v[1] * e1[1] + v[2] * e1[2];
+    const double cy = v[0] * e2[0] + v[1] * e2[1] + v[2] * e2[2];
+    // Barycentric (v, w) of a 2D point (x, y): solve x = v bx + w cx, y = w cy.
+    Rng rng(stream_seed(options.seed, f));
+    active.clear();
+    // Adds the point of barycentric coordinates (1 - v - w, v, w) unless it is off the facet
+    // or conflicts; x, y are its frame coordinates (for the Bridson step).
+    auto try_bary = [&](double vv, double w, double x, double y) -> bool {
+      const double uu = (1 - vv) - w;
+      if (!(uu >= 0 && vv >= 0 && w >= 0)) return false;
+      double p[3];
+      for (int k = 0; k < 3; ++k) p[k] = uu * a[k] + vv * b[k] + w * c[k];
+      const double h = sizing(p);
+      if (grid.conflicts(p, h, options.beta)) return false;
+      grid.insert(p, h);
+      nodes.push_back(p, NodeKind::surface, std::uint32_t(f), float(h));
+      active.push_back(x);
+      active.push_back(y);
+      active.push_back(h);
+      return true;
+    };
+    auto try_add = [&](double x, double y) -> bool {  // frame coordinates
+      const double w = y / cy;
+      return try_bary((x - w * cx) / bx, w, x, y);
+    };
+    auto advance = [&] {  // Bridson step around the accepted nodes (depth-first, newest first)
+      while (!active.empty()) {
+        const std::size_t k = active.size() - 3;
+        const double x0 = active[k], y0 = active[k + 1], r = options.beta * active[k + 2];
+        bool added = false;
+        for (int tr = 0; tr < options.tries && !added; ++tr) {
+          const double ang = rng.uniform(0, 2 * std::numbers::pi);
+          const double rad = r * (1 + rng.uniform());
+          added = try_add(x0 + rad * std::cos(ang), y0 + rad * std::sin(ang));
+        }
+        if (!added) active.resize(k);  // retire it (an addition pushed a new active node)
+      }
+    };
+    // Darts: one per 2 r^2 of area (r at the centroid), plus a few, seed the Bridson step;
+    // the sweep below then fills what they and the neighbouring facets left.
+    const double g[3] = {(a[0] + b[0] + c[0]) / 3, (a[1] + b[1] + c[1]) / 3,
+                         (a[2] + b[2] + c[2]) / 3};
+    const double rc = options.beta * sizing(g);
+    const double darts = std::min(1e7, std::ceil(0.25 * area2 / (rc * rc)) + 4);
+    for (double d = 0; d < darts; ++d) {
+      double r1 = rng.uniform(), r2 = rng.uniform();
+      if (r1 + r2 > 1) {
+        r1 = 1 - r1;
+        r2 = 1 - r2;
+      }
+      try_add(r1 * bx + r2 * cx, r2 * cy);
+      advance();
+    }
+    // Sweep: every point of a grid a + (i/m1)(b - a) + (j/m2)(c - a) (facet edges and
+    // corners included) with steps <= r_min / 2 is tried, so that no surface point is left
+    // farther than about beta h + r_min / 2 from a node, also where neighbouring facets'
+    // nodes cut this facet's free area into pieces the darts missed.
+    const double rmin = options.beta * std::max(sizing.min_size(), 1e-300);
+    const double lc = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    const double r_sweep = std::max(rmin, 0.5 * std::min({rc, options.beta * sizing(a),
+                                                          options.beta * sizing(b),
+                                                          options.beta * sizing(c)}));
+    const std::int64_t m1 = std::clamp<std::int64_t>(std::int64_t(std::ceil(lu / r_sweep)), 1, 4096);
+    const std::int64_t m2 = std::clamp<std::int64_t>(std::int64_t(std::ceil(lc / r_sweep)), 1, 4096);
+    for (std::int64_t i = 0; i <= m1; ++i)
+      for (std::int64_t j = 0; i * m2 + j * m1 <= m1 * m2; ++j) {
+        const double vv = double(i) / double(m1);
+        const double w = i * m2 + j * m1 == m1 * m2 ? 1 - vv : double(j) / double(m2);
+        try_bary(vv, w, vv * bx + w * cx, w * cy);
+        advance();
+      }
+  }
+  if (progress) progress(1.0);
+}
+
+}  // namespace kdmesh

@@ -1,0 +1,503 @@
+// kdmesh — tests of node placement (corners, feature edges, surface, interior) and of the
+// size fidelity measure.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "mesher/edge_sampling.h"
+#include "mesher/node_placement.h"
+#include "mesher/size_fidelity.h"
+
+namespace kdmesh {
+namespace {
+
+struct Model {
+  PreparedSurface surface;
+  FeatureEdges features;
+};
+
+void finish(Model& m) {
+  PreparedSurface& s = m.surface;
+  s.tri_shell.assign(s.mesh.num_tris(), 0);
+  s.shell_body = {0};
+  s.shell_parent = {kNoFacet};
+  s.num_bodies = 1;
+  for (int a = 0; a < 3; ++a) {
+    s.bbox_min[a] = INFINITY;
+    s.bbox_max[a] = -INFINITY;
+  }
+  for (std::size_t i = 0; i < s.mesh.points.size(); ++i)
+    for (int a = 0; a < 3; ++a) {
+      s.bbox_min[a] = std::min(s.bbox_min[a], s.mesh.points.p(std::uint32_t(i))[a]);
+      s.bbox_max[a] = std::max(s.bbox_max[a], s.mesh.points.p(std::uint32_t(i))[a]);
+    }
+  s.shell_volume = {s.volume};
+}
+
+/// Box [0,lx] x [0,ly] x [0,lz]: 12 outward facets; its 12 edges are features, its 8
+/// vertices corners (vertex i = (lx*(i&1), ly*(i>>1&1), lz*(i>>2&1))).
+Model box(double lx, double ly, double lz) {
+  Model m;
+  for (int i = 0; i < 8; ++i)
+    m.surface.mesh.points.push_back(lx * (i & 1), ly * (i >> 1 & 1), lz * (i >> 2 & 1));
+  m.surface.mesh.tris = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                         2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+  m.features.edges = {0, 1, 0, 2, 0, 4, 1, 3, 1, 5, 2, 3, 2, 6, 3, 7, 4, 5, 4, 6, 5, 7, 6, 7};
+  m.features.corners = {0, 1, 2, 3, 4, 5, 6, 7};
+  m.surface.volume = lx * ly * lz;
+  finish(m);
+  return m;
+}
+
+/// n-gon prism of circumradius r and height H (axis z from 0 to H); the two rims are
+/// corner-free feature loops (rim i: points i*n .. i*n+n-1), the centres are 2n and 2n+1.
+Model cylinder(double r, double H, std::uint32_t n) {
+  Model m;
+  auto& P = m.surface.mesh.points;
+  for (int k = 0; k < 2; ++k)
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const double t = 2 * std::numbers::pi * i / n;
+      P.push_back(r * std::cos(t), r * std::sin(t), k * H);
+    }
+  P.push_back(0, 0, 0);
+  P.push_back(0, 0, H);
+  const std::uint32_t cb = 2 * n, ct = 2 * n + 1;
+  auto& T = m.surface.mesh.tris;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t j = (i + 1) % n;
+    T.insert(T.end(), {i, j, n + j, i, n + j, n + i, cb, j, i, ct, n + i, n + j});
+    for (const std::uint32_t o : {0u, n}) {
+      m.features.edges.push_back(std::min(o + i, o + j));
+      m.features.edges.push_back(std::max(o + i, o + j));
+    }
+  }
+  // Sorted, as FeatureEdges asks.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> e;
+  for (std::size_t k = 0; k < m.features.edges.size(); k += 2)
+    e.emplace_back(m.features.edges[k], m.features.edges[k + 1]);
+  std::sort(e.begin(), e.end());
+  m.features.edges.clear();
+  for (const auto& [a, b] : e) m.features.edges.insert(m.features.edges.end(), {a, b});
+  m.surface.volume = 0.5 * n * r * r * std::sin(2 * std::numbers::pi / n) * H;
+  finish(m);
+  return m;
+}
+
+SizingField uniform(const Model& m, double h) {
+  SizingOptions o;
+  o.max_size = h;
+  return build_sizing_field(m.surface.mesh, o);
+}
+
+double dist(const double* a, const double* b) {
+  return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+}
+
+/// Distance of p to the plane of facet f, and its barycentric coordinates in f (from
+/// sub-triangle areas projected on the facet normal).
+void facet_coords(const SurfaceMesh& s, std::uint32_t f, const double* p, double* plane_dist,
+                  double* bary) {
+  const std::uint32_t* t = s.tri(f);
+  const double* v[3] = {s.points.p(t[0]), s.points.p(t[1]), s.points.p(t[2])};
+  auto cross = [](const double* a, const double* b, const double* c, double* n) {
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    n[0] = u[1] * w[2] - u[2] * w[1];
+    n[1] = u[2] * w[0] - u[0] * w[2];
+    n[2] = u[0] * w[1] - u[1] * w[0];
+  };
+  double n[3];
+  cross(v[0], v[1], v[2], n);
+  const double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+  *plane_dist = std::fabs((p[0] - v[0][0]) * n[0] + (p[1] - v[0][1]) * n[1] +
+                          (p[2] - v[0][2]) * n[2]) / std::sqrt(nn);
+  for (int i = 0; i < 3; ++i) {
+    double m[3];
+    cross(p, v[(i + 1) % 3], v[(i + 2) % 3], m);
+    bary[i] = (m[0] * n[0] + m[1] * n[1] + m[2] * n[2]) / nn;
+  }
+}
+
+std::size_t count(const NodeSet& ns, NodeKind k) {
+  return std::size_t(std::count(ns.kind.begin(), ns.kind.end(), k));
+}
+
+// ---- surface nodes lie on their facet ----
+
+void expect_surface_nodes_on_facets(const Model& m, const NodeSet& ns, double extent) {
+  const SurfaceMesh& s = m.surface.mesh;
+  std::size_t checked = 0;
+  for (std::uint32_t i = 0; i < ns.size_count(); ++i) {
+    if (ns.kind[i] == NodeKind::interior) {
+      EXPECT_EQ(ns.facet[i], kNoFacet) << "interior node " << i;
+      continue;
+    }
+    ASSERT_LT(ns.facet[i], s.num_tris()) << "node " << i;
+    double d, b[3];
+    facet_coords(s, ns.facet[i], ns.points.p(i), &d, b);
+    EXPECT_LE(d, 1e-12 * extent) << "node " << i << " is off the plane of facet " << ns.facet[i];
+    for (int k = 0; k < 3; ++k)
+      EXPECT_GE(b[k], -1e-12) << "node " << i << " is outside facet " << ns.facet[i];
+    EXPECT_NEAR(b[0] + b[1] + b[2], 1.0, 1e-12);
+    ++checked;
+  }
+  EXPECT_GT(checked, 0u);
+}
+
+TEST(NodePlacement, BoxSurfaceNodesLieOnTheirFacet) {
+  const Model m = box(1, 1.3, 0.7);
+  const SurfaceQuery q(m.surface.mesh);
+  const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, 0.1));
+  expect_surface_nodes_on_facets(m, ns, 1.3);
+}
+
+TEST(NodePlacement, CylinderSurfaceNodesLieOnTheirFacet) {
+  const Model m = cylinder(0.5, 1, 48);
+  const SurfaceQuery q(m.surface.mesh);
+  const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, 0.08));
+  expect_surface_nodes_on_facets(m, ns, 1);
+  // The rims are feature loops: edge nodes exist and lie on z = 0 or z = 1 at radius <= r.
+  std::size_t rim = 0;
+  for (std::uint32_t i = 0; i < ns.size_count(); ++i)
+    if (ns.kind[i] == NodeKind::edge) {
+      ++rim;
+      const double* p = ns.points.p(i);
+      EXPECT_TRUE(p[2] == 0 || p[2] == 1) << "edge node " << i << " z = " << p[2];
+      EXPECT_LE(std::hypot(p[0], p[1]), 0.5 + 1e-12);
+    }
+  // Each rim: perimeter 48 * 2 r sin(pi/48) = 3.1394 long, h = 0.08: round(39.24) = 39
+  // pieces, so 39 nodes per loop (the loop start is an edge node, no corners).
+  EXPECT_EQ(rim, 2u * 39u);
+}
+
+// ---- interior nodes: strictly inside, clear of the surface ----
+
+void expect_interior_clear(const Model& m, const NodeSet& ns, const SizingField& h,
+                           double clearance) {
+  const SurfaceQuery q(m.surface.mesh);
+  std::size_t n = 0;
+  for (std::uint32_t i = 0; i < ns.size_count(); ++i) {
+    if (ns.kind[i] != NodeKind::interior) continue;
+    ++n;
+    const double* p = ns.points.p(i);
+    EXPECT_EQ(q.side(p), 1) << "interior node " << i;
+    EXPECT_GE(q.distance(p), clearance * h(p)) << "interior node " << i;
+  }
+  EXPECT_GT(n, 0u);
+}
+
+TEST(NodePlacement, BoxInteriorNodesInsideAndClear) {
+  const Model m = box(1, 1.3, 0.7);
+  const SurfaceQuery q(m.surface.mesh);
+  const SizingField h = uniform(m, 0.1);
+  const NodeSet ns = place_nodes(m.surface, q, m.features, h);
+  expect_interior_clear(m, ns, h, PlacementOptions{}.interior_clearance);
+}
+
+TEST(NodePlacement, CylinderInteriorNodesInsideAndClearWithOtherClearance) {
+  const Model m = cylinder(0.5, 1, 48);
+  const SurfaceQuery q(m.surface.mesh);
+  const SizingField h = uniform(m, 0.08);
+  PlacementOptions o;
+  o.interior_clearance = 1.3;
+  const NodeSet ns = place_nodes(m.surface, q, m.features, h, o);
+  expect_interior_clear(m, ns, h, 1.3);
+}
+
+// ---- corners and feature edges ----
+
+TEST(NodePlacement, BoxCornersArePresentAsCornerNodes) {
+  const Model m = box(1, 1.3, 0.7);
+  const SurfaceQuery q(m.surface.mesh);
+  const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, 0.1));
+  ASSERT_EQ(count(ns, NodeKind::corner), 8u);
+  std::set<std::vector<double>> corners, expected;
+  for (std::uint32_t i = 0; i < ns.size_count(); ++i)
+    if (ns.kind[i] == NodeKind::corner) {
+      const double* p = ns.points.p(i);
+      corners.insert({p[0], p[1], p[2]});
+    }
+  for (int i = 0; i < 8; ++i) expected.insert({1.0 * (i & 1), 1.3 * (i >> 1 & 1), 0.7 * (i >> 2 & 1)});
+  EXPECT_EQ(corners, expected);
+}
+
+TEST(NodePlacement, UniformEdgeSpacingIsLengthOverRoundedCount) {
+  // With h uniform, the integral of ds/h along an edge of length L is I = L/h, the edge is
+  // cut into n = round(L/h) pieces of equal I/n, i.e. equal length L/n. Box 1 x 1.3 x 0.7,
+  // h = 0.12: x edges 1/0.12 = 8.33 -> 8 pieces of 0.125; y edges 1.3/0.12 = 10.83 -> 11 of
+  // 0.11818...; z edges 0.7/0.12 = 5.83 -> 6 of 0.11666...
+  const Model m = box(1, 1.3, 0.7);
+  const SurfaceQuery q(m.surface.mesh);
+  const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, 0.12));
+  const double L[3] = {1, 1.3, 0.7};
+  const int pieces[3] = {8, 11, 6};
+  EXPECT_EQ(count(ns, NodeKind::edge), std::size_t(4 * (7 + 10 + 5)));
+  for (int axis = 0; axis < 3; ++axis) {
+    // The edge along `axis` through the origin: the other two coordinates are 0.
+    std::vector<double> t = {0, L[axis]};  // its two corners
+    for (std::uint32_t i = 0; i < ns.size_count(); ++i) {
+      if (ns.kind[i] != NodeKind::edge) continue;
+      const double* p = ns.points.p(i);
+      if (p[(axis + 1) % 3] == 0 && p[(axis + 2) % 3] == 0) t.push_back(p[axis]);
+    }
+    std::sort(t.begin(), t.end());
+    ASSERT_EQ(t.size(), std::size_t(pieces[axis] + 1)) << "axis " << axis;
+    for (std::size_t k = 1; k < t.size(); ++k)
+      EXPECT_NEAR(t[k] - t[k - 1], L[axis] / pieces[axis], 1e-12) << "axis " << axis;
+  }
+}
+
+TEST(NodePlacement, ClosedLoopStartsAtItsSmallestPoint) {
+  const Model m = cylinder(0.5, 1, 12);
+  const std::vector<FeaturePolyline> lines = chain_feature_edges(m.surface.mesh, m.features);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_TRUE(lines[0].closed);
+  EXPECT_TRUE(lines[1].closed);
+  EXPECT_EQ(lines[0].points.front(), 0u);
+  EXPECT_EQ(lines[0].points.back(), 0u);
+  EXPECT_EQ(lines[1].points.front(), 12u);
+  EXPECT_EQ(lines[0].points.size(), 13u);  // 12 edges, the start repeated at the end
+}
+
+TEST(NodePlacement, FeatureEdgeOutsideTheSurfaceIsAUsageError) {
+  Model m = box(1, 1, 1);
+  m.features.edges.push_back(7);
+  m.features.edges.push_back(99);
+  EXPECT_THROW(chain_feature_edges(m.surface.mesh, m.features), UsageError);
+}
+
+// ---- spacing and counts ----
+
+TEST(NodePlacement, NoTwoNodesCloserThanTheGuaranteedBound) {
+  // Guarantee: a surface or interior node keeps >= 0.7 (h_p + h_q) / 2 from every node placed
+  // before it (the surface rule; interior nodes use 0.75). Feature nodes are mandatory; on
+  // this box their spacing is L/round(L/h) >= 0.7 / 0.75 h (see the edge test above), so all
+  // pairs keep >= 0.7 h (h uniform). Brute force over all pairs.
+  for (const bool cyl : {false, true}) {
+    const Model m = cyl ? cylinder(0.5, 1, 48) : box(1, 1.3, 0.7);
+    const double h = cyl ? 0.09 : 0.12;
+    const SurfaceQuery q(m.surface.mesh);
+    const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, h));
+    double dmin = INFINITY;
+    for (std::uint32_t i = 0; i < ns.size_count(); ++i)
+      for (std::uint32_t j = i + 1; j < ns.size_count(); ++j)
+        dmin = std::min(dmin, dist(ns.points.p(i), ns.points.p(j)));
+    EXPECT_GE(dmin, 0.7 * h * (1 - 1e-12)) << (cyl ? "cylinder" : "box");
+  }
+}
+
+TEST(NodePlacement, NodeCountsFollowVolumeAndAreaOverCellSize) {
+  // Box 1 x 1.3 x 0.7, h = 0.05, clearance c = 0.8.
+  // Interior: a BCC lattice of cube edge a = 1.083 h holds 2 nodes per a^3. Every node is
+  // >= c h from the faces, every cell of the shrunk box [c h + a, L - c h - a] is fully
+  // filled, so  2 prod(L_i - 2 c h - 2 a) / a^3  <=  N_lattice, and N_lattice <=
+  // 2 prod(L_i - 2 c h + 2 a) / a^3 (cells meeting [c h, L - c h]). The boundary layer adds
+  // nodes in the gap; it can at most fill the band [c h, c h + a] with spacing 0.75 h,
+  // i.e. <= area * a / (0.75 h)^3 * sqrt(2) (densest packing of balls of radius 0.375 h).
+  // Surface: Poisson-disk nodes with spacing >= 0.7 h: discs of radius 0.35 h around them
+  // are disjoint and within 0.35 h of the surface: N_s <= (area + perimeter... ) bounded by
+  // (A + 0.35 h * E + pi (0.35 h)^2 * 8) / (pi (0.35 h)^2) with E the total edge length;
+  // and every surface point is within 0.7 h + sweep step (0.35 h) of a node, so
+  // N_s >= A / (pi (1.05 h)^2).
+  const double L[3] = {1, 1.3, 0.7}, h = 0.05, c = 0.8, a = 1.083 * h;
+  const Model m = box(L[0], L[1], L[2]);
+  const SurfaceQuery q(m.surface.mesh);
+  const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, h));
+  double lo = 2, hi = 2;
+  for (const double l : L) {
+    lo *= (l - 2 * c * h - 2 * a) / a;
+    hi *= (l - 2 * c * h + 2 * a) / a;
+  }
+  const double area = 2 * (L[0] * L[1] + L[1] * L[2] + L[0] * L[2]);
+  const double E = 4 * (L[0] + L[1] + L[2]);
+  hi += area * a / std::pow(0.75 * h, 3) * std::sqrt(2.0);
+  const double n_int = double(count(ns, NodeKind::interior));
+  EXPECT_GE(n_int, lo);
+  EXPECT_LE(n_int, hi);
+  const double disc = std::numbers::pi * 0.35 * h * 0.35 * h;
+  const double n_surf = double(ns.size_count()) - n_int;
+  EXPECT_LE(n_surf, (area + 0.35 * h * E + 8 * disc) / disc);
+  EXPECT_GE(n_surf, area / (std::numbers::pi * 1.05 * h * 1.05 * h));
+  // Sizes recorded per node are the field's.
+  for (std::uint32_t i = 0; i < ns.size_count(); ++i) ASSERT_EQ(ns.size[i], float(h));
+}
+
+// ---- determinism ----
+
+bool same(const NodeSet& a, const NodeSet& b) {
+  return a.points.xyz.size() == b.points.xyz.size() &&
+         std::memcmp(a.points.xyz.data(), b.points.xyz.data(), a.points.xyz.size() * sizeof(double)) == 0 &&
+         a.kind == b.kind && a.facet == b.facet &&
+         std::memcmp(a.size.data(), b.size.data(), a.size.size() * sizeof(float)) == 0;
+}
+
+TEST(NodePlacement, DeterministicForASeedAndDifferentAcrossSeeds) {
+  const Model m = cylinder(0.5, 1, 48);
+  const SurfaceQuery q(m.surface.mesh);
+  const SizingField h = uniform(m, 0.08);
+  PlacementOptions o;
+  o.seed = 7;
+  const NodeSet a = place_nodes(m.surface, q, m.features, h, o);
+  const NodeSet b = place_nodes(m.surface, q, m.features, h, o);
+  EXPECT_TRUE(same(a, b));
+  o.seed = 8;
+  const NodeSet c = place_nodes(m.surface, q, m.features, h, o);
+  EXPECT_FALSE(same(a, c));
+}
+
+// ---- thin plate: no room inside ----
+
+TEST(NodePlacement, PlateThinnerThanTheClearanceHasSurfaceNodesOnly) {
+  // Thickness 0.1, h = 0.2: every inside point is <= 0.05 from the surface, less than
+  // c h = 0.16, so no interior node may exist.
+  const Model m = box(1, 1, 0.1);
+  const SurfaceQuery q(m.surface.mesh);
+  const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, 0.2));
+  EXPECT_EQ(count(ns, NodeKind::interior), 0u);
+  EXPECT_EQ(count(ns, NodeKind::corner), 8u);
+  EXPECT_GT(count(ns, NodeKind::surface), 0u);
+}
+
+// ---- options, progress ----
+
+TEST(NodePlacement, BadClearanceIsAUsageError) {
+  const Model m = box(1, 1, 1);
+  const SurfaceQuery q(m.surface.mesh);
+  PlacementOptions o;
+  o.interior_clearance = -1;
+  EXPECT_THROW(place_nodes(m.surface, q, m.features, uniform(m, 0.2), o), UsageError);
+  o.interior_clearance = NAN;
+  EXPECT_THROW(place_nodes(m.surface, q, m.features, uniform(m, 0.2), o), UsageError);
+}
+
+TEST(NodePlacement, ProgressReportsEveryStageUpToOne) {
+  const Model m = box(1, 1, 1);
+  const SurfaceQuery q(m.surface.mesh);
+  PlacementOptions o;
+  std::vector<std::string> stages;
+  double last = -1;
+  o.progress = [&](const std::string& s, double f) {
+    if (stages.empty() || stages.back() != s) stages.push_back(s);
+    EXPECT_GE(f, 0.0);
+    EXPECT_LE(f, 1.0);
+    last = f;
+  };
+  place_nodes(m.surface, q, m.features, uniform(m, 0.2), o);
+  EXPECT_EQ(stages, (std::vector<std::string>{"edges", "surface", "interior"}));
+  EXPECT_EQ(last, 1.0);
+}
+
+// ---- graded field ----
+
+/// Expected interior node count of a lattice fill of the box [0,L]^3 region `lo..hi`:
+/// the integral of the BCC density 2 / (1.083 h)^3 over the points at distance >= c h from
+/// the box faces (distance computed directly: min over axes of min(x, L - x)), midpoint rule
+/// on an m^3 grid. Independent of the placement code except for the lattice constant.
+double expected_lattice_nodes(const SizingField& h, double L, const double* lo, const double* hi,
+                              double c, int m) {
+  double sum = 0;
+  const double d[3] = {(hi[0] - lo[0]) / m, (hi[1] - lo[1]) / m, (hi[2] - lo[2]) / m};
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j)
+      for (int k = 0; k < m; ++k) {
+        const double p[3] = {lo[0] + (i + 0.5) * d[0], lo[1] + (j + 0.5) * d[1],
+                             lo[2] + (k + 0.5) * d[2]};
+        double dist = INFINITY;
+        for (const double x : p) dist = std::min({dist, x, L - x});
+        const double hp = h(p);
+        if (dist >= c * hp) sum += 2 / std::pow(1.083 * hp, 3);
+      }
+  return sum * d[0] * d[1] * d[2];
+}
+
+TEST(NodePlacement, GradedFieldDensityFollowsTheField) {
+  // Box [0,2]^3, a point zone of size 0.01 at its centre, gradation 0.3, h_max 0.1: h grows
+  // from 0.01 to 0.1 at distance 0.3. The interior lattice holds 2 nodes per (1.083 h)^3
+  // (see the count test), up to the level rounding: a / (1.083 h) in [rho^-1/2, rho^1/2],
+  // rho = sqrt(2), so the local density is within a factor rho^(3/2) = 1.68 either way;
+  // level transitions drop a few nodes. So the interior count in the cube [0.8, 1.2]^3
+  // around the zone and in the cube [1.4, 1.7]^3 (h = 0.1 throughout: its nearest point to
+  // the centre has h = 0.01 + 0.3 * 0.69 > 0.1; it is >= 0.3 from the faces, beyond the
+  // boundary layer) must each be within [0.5, 1.7] x the integral of that density, computed
+  // independently below.
+  const Model m = box(2, 2, 2);
+  SizingOptions so;
+  so.max_size = 0.1;
+  so.gradation = 0.3;
+  SizingZone z;
+  z.kind = SizingZone::Kind::point;
+  z.size = 0.01;
+  z.coords = {1, 1, 1};
+  so.zones.push_back(z);
+  const SizingField h = build_sizing_field(m.surface.mesh, so);
+  const SurfaceQuery q(m.surface.mesh);
+  const NodeSet ns = place_nodes(m.surface, q, m.features, h);
+  const double c = PlacementOptions{}.interior_clearance;
+  const double n0[3] = {0.8, 0.8, 0.8}, n1[3] = {1.2, 1.2, 1.2};
+  const double f0[3] = {1.4, 1.4, 1.4}, f1[3] = {1.7, 1.7, 1.7};
+  auto in = [](const double* p, const double* lo, const double* hi) {
+    return p[0] >= lo[0] && p[0] < hi[0] && p[1] >= lo[1] && p[1] < hi[1] && p[2] >= lo[2] &&
+           p[2] < hi[2];
+  };
+  std::size_t near = 0, far = 0;
+  for (std::uint32_t i = 0; i < ns.size_count(); ++i) {
+    const double* p = ns.points.p(i);
+    ASSERT_EQ(ns.size[i], float(h(p)));
+    if (ns.kind[i] != NodeKind::interior) continue;
+    near += in(p, n0, n1);
+    far += in(p, f0, f1);
+  }
+  const double e_near = expected_lattice_nodes(h, 2, n0, n1, c, 80);
+  const double e_far = expected_lattice_nodes(h, 2, f0, f1, c, 40);
+  EXPECT_GE(double(near), 0.5 * e_near);
+  EXPECT_LE(double(near), 1.7 * e_near);
+  EXPECT_GE(double(far), 0.5 * e_far);
+  EXPECT_LE(double(far), 1.7 * e_far);
+  // The zone matters: around it the field expects far more than h = 0.1 would, beyond the
+  // tolerance above, so these bounds separate graded from uniform placement.
+  const double e_near_uniform = expected_lattice_nodes(uniform(m, 0.1), 2, n0, n1, c, 80);
+  EXPECT_GT(e_near, 1.7 / 0.5 * e_near_uniform);
+  expect_interior_clear(m, ns, h, c);
+  expect_surface_nodes_on_facets(m, ns, 2);
+}
+
+// ---- size fidelity ----
+
+TEST(SizeFidelity, RightCornerTetByHand) {
+  // Tet (0,0,0), (1,0,0), (0,1,0), (0,0,1), h = 1: edges 1, 1, 1, sqrt2, sqrt2, sqrt2.
+  // Mean (3 + 3 sqrt2) / 6 = 1.20711; in [0.7, 1.4]: the three unit edges (sqrt2 = 1.414 is
+  // long), so 0.5; min 1, max sqrt2.
+  PointSet p;
+  p.push_back(0, 0, 0);
+  p.push_back(1, 0, 0);
+  p.push_back(0, 1, 0);
+  p.push_back(0, 0, 1);
+  SurfaceMesh s;
+  s.points = p;
+  SizingOptions o;
+  o.max_size = 1;
+  const SizingField h = build_sizing_field(s, o);
+  // Two copies of the tet (the second with permuted ids): edges are counted once.
+  const SizeFidelity f = measure_size_fidelity(p, {0, 1, 2, 3, 3, 2, 0, 1}, h);
+  EXPECT_EQ(f.edges, 6u);
+  EXPECT_NEAR(f.mean_ratio, (3 + 3 * std::sqrt(2.0)) / 6, 1e-15);
+  EXPECT_DOUBLE_EQ(f.in_range, 0.5);
+  EXPECT_DOUBLE_EQ(f.long_fraction, 0.5);
+  EXPECT_DOUBLE_EQ(f.short_fraction, 0.0);
+  EXPECT_DOUBLE_EQ(f.min_ratio, 1.0);
+  EXPECT_DOUBLE_EQ(f.max_ratio, std::sqrt(2.0));
+  EXPECT_EQ(measure_size_fidelity(p, {}, h).edges, 0u);
+  EXPECT_THROW(measure_size_fidelity(p, {0, 1, 2}, h), UsageError);
+  EXPECT_THROW(measure_size_fidelity(p, {0, 1, 2, 4}, h), UsageError);
+}
+
+}  // namespace
+}  // namespace kdmesh
