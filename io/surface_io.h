@@ -16,7 +16,10 @@ SurfaceMesh read_surface(const std::string& path);
 SurfaceMesh read_stl(const std::string& path);
 SurfaceMesh read_ply(const std::string& path);
 
-/// Writers (atomic: temp file + rename; OutputError on failure).
+/// Writers (atomic: temp file + rename; OutputError on failure; UsageError for a mesh with
+/// non-finite coordinates or out-of-range point ids). Binary STL stores float coordinates
+/// (doubles are rounded); ascii STL and both PLY variants keep every double exactly.
+/// write_ply(binary = true) writes binary_little_endian.
 void write_stl(const SurfaceMesh& mesh, const std::string& path, bool binary = true);
 void write_ply(const SurfaceMesh& mesh, const std::string& path, bool binary = true);
 

@@ -52,6 +52,8 @@ class SurfaceError : public GeometryError {
 ///   open (boundary edges); non-manifold edges (> 2 facets); non-manifold vertices;
 ///   inconsistent orientation within a shell; self-intersections.
 /// Shells facing inward are flipped (a notice says which); nesting decides outer vs void.
+/// Points that no facet uses are dropped (a notice says how many); the others keep their order.
+/// Throws UsageError if options.scale is not finite and > 0.
 PreparedSurface prepare_surface(SurfaceMesh mesh, const std::string& source,
                                 const SurfaceOptions& options = {});
 

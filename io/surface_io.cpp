@@ -1,0 +1,954 @@
+// kdmesh — surface readers and writers: STL (ascii/binary) and PLY (ascii/binary LE/BE).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+//
+// Why these readers are our own and not OpenMesh's (OpenMesh 9.0, Debian 12):
+//   * OpenMesh's readers return a bool and print their reason to omerr; we need InputErrors
+//     naming the file and the line (ascii) or facet/byte offset (binary). A custom
+//     BaseImporter sees vertices and faces, not the reader's position in the file.
+//   * Its STL reader welds vertices itself, through a map of float vectors compared with an
+//     epsilon (STLReader::set_epsilon), not by bit-identical coordinates (-0.0 == 0.0).
+//   * Its PLY reader hands the header's element counts to BaseImporter::reserve before any data
+//     is read, so the sizes it trusts are the ones a lying header chooses; checking them
+//     against the file size first would mean re-parsing the header ourselves anyway.
+// So every format here is parsed from one in-memory copy of the file, every count is checked
+// against the bytes that remain BEFORE anything is allocated from it, and errors are typed.
+// OpenMesh stays linked to io/ (CMake) for later adapters; this file does not include it.
+//
+// Welding: points with bit-identical coordinates (after mapping -0.0 to +0.0) become one
+// point, through an open-addressing hash table (O(n)); facets keep file order and orientation.
+#include "io/surface_io.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <bit>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace kdmesh {
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// File input
+// ---------------------------------------------------------------------------------------------
+
+struct FdGuard {
+  int fd;
+  ~FdGuard() {
+    if (fd >= 0) ::close(fd);
+  }
+};
+
+std::string read_whole_file(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw InputError(path, 0, std::string("cannot open: ") + std::strerror(errno));
+  FdGuard guard{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0)
+    throw InputError(path, 0, std::string("cannot stat: ") + std::strerror(errno));
+  if (S_ISDIR(st.st_mode)) throw InputError(path, 0, "cannot read: is a directory");
+  std::string data(S_ISREG(st.st_mode) ? std::size_t(st.st_size) + 1 : std::size_t(1) << 16, '\0');
+  std::size_t used = 0;
+  for (;;) {
+    if (used == data.size()) data.resize(2 * data.size());
+    const ssize_t n = ::read(fd, data.data() + used, data.size() - used);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw InputError(path, 0, std::string("cannot read: ") + std::strerror(errno));
+    }
+    if (n == 0) break;
+    used += std::size_t(n);
+  }
+  data.resize(used);
+  if (data.empty()) throw InputError(path, 0, "empty file");
+  return data;
+}
+
+std::string quote(std::string_view tok) {
+  constexpr std::size_t kMax = 40;
+  std::string s(tok.substr(0, kMax));
+  for (char& c : s)
+    if (!std::isprint(static_cast<unsigned char>(c))) c = '?';
+  return "'" + s + (tok.size() > kMax ? "...'" : "'");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Welding
+// ---------------------------------------------------------------------------------------------
+
+/// Maps coordinates to point ids; identical coordinates (bitwise, -0.0 == +0.0) share an id.
+class Welder {
+ public:
+  explicit Welder(PointSet& out, std::size_t expected) : out_(out) {
+    std::size_t cap = 16;
+    while (cap < 2 * expected) cap *= 2;
+    slots_.assign(cap, kEmpty);
+    out_.xyz.reserve(3 * expected);
+  }
+
+  std::uint32_t add(double x, double y, double z) {
+    const std::uint64_t k[3] = {bits(x), bits(y), bits(z)};
+    std::uint64_t h = k[0] * 0x9E3779B97F4A7C15ull;
+    h ^= (h >> 29) ^ (k[1] * 0xC2B2AE3D27D4EB4Full);
+    h ^= (h >> 31) ^ (k[2] * 0x165667B19E3779F9ull);
+    h ^= h >> 33;
+    std::size_t mask = slots_.size() - 1;
+    for (std::size_t i = h & mask;; i = (i + 1) & mask) {
+      const std::uint32_t id = slots_[i];
+      if (id == kEmpty) {
+        const std::size_t n = out_.size();
+        if (n >= kEmpty) throw std::length_error("more than 2^32-1 distinct points");
+        out_.push_back(x == 0 ? 0.0 : x, y == 0 ? 0.0 : y, z == 0 ? 0.0 : z);
+        slots_[i] = std::uint32_t(n);
+        if (2 * (n + 1) > slots_.size()) grow();
+        return std::uint32_t(n);
+      }
+      const double* p = out_.p(id);
+      if (bits(p[0]) == k[0] && bits(p[1]) == k[1] && bits(p[2]) == k[2]) return id;
+    }
+  }
+
+ private:
+  static constexpr std::uint32_t kEmpty = 0xFFFFFFFFu;
+  static std::uint64_t bits(double v) { return std::bit_cast<std::uint64_t>(v == 0 ? 0.0 : v); }
+
+  void grow() {
+    std::vector<std::uint32_t> old(slots_.size() * 2, kEmpty);
+    old.swap(slots_);
+    const std::size_t mask = slots_.size() - 1;
+    for (std::uint32_t id : old) {
+      if (id == kEmpty) continue;
+      const double* p = out_.p(id);
+      const std::uint64_t k[3] = {bits(p[0]), bits(p[1]), bits(p[2])};
+      std::uint64_t h = k[0] * 0x9E3779B97F4A7C15ull;
+      h ^= (h >> 29) ^ (k[1] * 0xC2B2AE3D27D4EB4Full);
+      h ^= (h >> 31) ^ (k[2] * 0x165667B19E3779F9ull);
+      h ^= h >> 33;
+      std::size_t i = h & mask;
+      while (slots_[i] != kEmpty) i = (i + 1) & mask;
+      slots_[i] = id;
+    }
+  }
+
+  PointSet& out_;
+  std::vector<std::uint32_t> slots_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Token scanning (ascii STL and ascii PLY data): whitespace-separated tokens with line numbers
+// ---------------------------------------------------------------------------------------------
+
+class Tokens {
+ public:
+  Tokens(std::string_view text, std::uint64_t first_line) : s_(text), line_(first_line) {}
+
+  /// Next token, or an empty view at end of input. line() is the line of that token.
+  std::string_view next() {
+    while (pos_ < s_.size()) {
+      const char c = s_[pos_];
+      if (c == '\n') {
+        ++line_;
+        ++pos_;
+      } else if (c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f') {
+        ++pos_;
+      } else {
+        break;
+      }
+    }
+    const std::size_t start = pos_;
+    while (pos_ < s_.size()) {
+      const char c = s_[pos_];
+      if (c == '\n' || c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f') break;
+      ++pos_;
+    }
+    return s_.substr(start, pos_ - start);
+  }
+
+  /// Skips the rest of the current line.
+  void skip_line() {
+    while (pos_ < s_.size() && s_[pos_] != '\n') ++pos_;
+  }
+
+  std::uint64_t line() const { return line_; }
+  std::size_t remaining() const { return s_.size() - pos_; }
+
+ private:
+  std::string_view s_;
+  std::size_t pos_ = 0;
+  std::uint64_t line_;
+};
+
+/// Parses a whole token as a double (a leading '+' allowed). False if it is not a number.
+bool parse_double(std::string_view tok, double& v) {
+  if (tok.size() > 1 && tok[0] == '+' && tok[1] != '-' && tok[1] != '+') tok.remove_prefix(1);
+  const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
+  return ec == std::errc() && ptr == tok.data() + tok.size();
+}
+
+template <class T>
+bool parse_integer(std::string_view tok, T& v) {
+  if (tok.size() > 1 && tok[0] == '+' && tok[1] != '-') tok.remove_prefix(1);
+  const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
+  return ec == std::errc() && ptr == tok.data() + tok.size();
+}
+
+bool iequals(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (std::tolower(static_cast<unsigned char>(a[i])) !=
+        std::tolower(static_cast<unsigned char>(b[i])))
+      return false;
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// STL
+// ---------------------------------------------------------------------------------------------
+
+std::uint16_t bswap(std::uint16_t u) { return __builtin_bswap16(u); }
+std::uint32_t bswap(std::uint32_t u) { return __builtin_bswap32(u); }
+std::uint64_t bswap(std::uint64_t u) { return __builtin_bswap64(u); }
+
+template <class T>
+T load_le(const unsigned char* p) {
+  using U = std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>;
+  U u;
+  std::memcpy(&u, p, sizeof u);
+  if constexpr (std::endian::native == std::endian::big) u = bswap(u);
+  return std::bit_cast<T>(u);
+}
+
+SurfaceMesh read_stl_binary(const std::string& path, std::string_view data) {
+  const auto* base = reinterpret_cast<const unsigned char*>(data.data());
+  const std::uint32_t count = load_le<std::uint32_t>(base + 80);
+  SurfaceMesh mesh;
+  mesh.tris.resize(3 * std::size_t(count));  // count was checked against the file size
+  Welder weld(mesh.points, std::size_t(count) / 2 + 3);
+  for (std::uint32_t f = 0; f < count; ++f) {
+    const unsigned char* rec = base + 84 + 50 * std::size_t(f);
+    for (int k = 0; k < 3; ++k) {
+      const unsigned char* v = rec + 12 + 12 * k;
+      const float x = load_le<float>(v), y = load_le<float>(v + 4), z = load_le<float>(v + 8);
+      if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
+        throw InputError(path, 0,
+                         "facet " + std::to_string(f) + " (0-based, byte offset " +
+                             std::to_string(v - base) + "): corner " + std::to_string(k) +
+                             " has a non-finite coordinate");
+      mesh.tris[3 * std::size_t(f) + k] = weld.add(x, y, z);
+    }
+  }
+  return mesh;
+}
+
+SurfaceMesh read_stl_ascii(const std::string& path, std::string_view data) {
+  Tokens tok(data, 1);
+  SurfaceMesh mesh;
+  // A facet takes well over 60 bytes of text ("facet normal 0 0 0 outer loop vertex 0 0 0 ...").
+  Welder weld(mesh.points, data.size() / 120 + 3);
+  mesh.tris.reserve(3 * (data.size() / 60 + 1));
+
+  auto expect = [&](std::string_view want, const char* context) {
+    const std::string_view t = tok.next();
+    if (!iequals(t, want))
+      throw InputError(path, tok.line(),
+                       "expected '" + std::string(want) + "' " + context + ", found " +
+                           (t.empty() ? std::string("end of file") : quote(t)));
+  };
+
+  std::string_view t = tok.next();
+  if (!iequals(t, "solid"))
+    throw InputError(path, tok.line(), "not an STL file: ascii STL must start with 'solid'");
+  tok.skip_line();  // solid name
+  std::uint64_t facet = 0;
+  for (;;) {
+    t = tok.next();
+    if (t.empty()) throw InputError(path, tok.line(), "unexpected end of file: no 'endsolid'");
+    if (iequals(t, "endsolid")) {
+      tok.skip_line();
+      // Some exporters concatenate several solids in one file.
+      t = tok.next();
+      if (t.empty()) break;
+      if (!iequals(t, "solid"))
+        throw InputError(path, tok.line(), "expected 'solid' or end of file after 'endsolid', found " + quote(t));
+      tok.skip_line();
+      continue;
+    }
+    if (!iequals(t, "facet"))
+      throw InputError(path, tok.line(),
+                       "expected 'facet' or 'endsolid', found " + quote(t));
+    const std::string where = "in facet " + std::to_string(facet) + " (0-based)";
+    expect("normal", where.c_str());
+    for (int k = 0; k < 3; ++k) {  // the normal is recomputed downstream; only its syntax matters
+      double v;
+      const std::string_view n = tok.next();
+      if (!parse_double(n, v))
+        throw InputError(path, tok.line(), "facet " + std::to_string(facet) + " (0-based): normal component " +
+                                               (n.empty() ? std::string("missing") : quote(n)) + " is not a number");
+    }
+    expect("outer", where.c_str());
+    expect("loop", where.c_str());
+    std::uint32_t ids[3];
+    for (int k = 0; k < 3; ++k) {
+      expect("vertex", (where + " (corner " + std::to_string(k) + "; exactly 3 per facet)").c_str());
+      double c[3];
+      for (int j = 0; j < 3; ++j) {
+        const std::string_view n = tok.next();
+        if (!parse_double(n, c[j]))
+          throw InputError(path, tok.line(),
+                           "facet " + std::to_string(facet) + " (0-based), corner " +
+                               std::to_string(k) + ": coordinate " +
+                               (n.empty() ? std::string("missing") : quote(n)) + " is not a number");
+        if (!std::isfinite(c[j]))
+          throw InputError(path, tok.line(),
+                           "facet " + std::to_string(facet) + " (0-based), corner " +
+                               std::to_string(k) + ": non-finite coordinate " + quote(n));
+      }
+      ids[k] = weld.add(c[0], c[1], c[2]);
+    }
+    expect("endloop", (where + " (exactly 3 vertices per facet)").c_str());
+    expect("endfacet", where.c_str());
+    mesh.tris.insert(mesh.tris.end(), ids, ids + 3);
+    ++facet;
+    if (facet > 0xFFFFFFFFull) throw InputError(path, tok.line(), "more than 2^32-1 facets");
+  }
+  return mesh;
+}
+
+// ---------------------------------------------------------------------------------------------
+// PLY
+// ---------------------------------------------------------------------------------------------
+
+enum class PlyType : std::uint8_t { i8, u8, i16, u16, i32, u32, f32, f64 };
+
+bool parse_ply_type(std::string_view s, PlyType& t) {
+  struct Name {
+    std::string_view name;
+    PlyType type;
+  };
+  static constexpr Name kNames[] = {
+      {"char", PlyType::i8},     {"int8", PlyType::i8},     {"uchar", PlyType::u8},
+      {"uint8", PlyType::u8},    {"short", PlyType::i16},   {"int16", PlyType::i16},
+      {"ushort", PlyType::u16},  {"uint16", PlyType::u16},  {"int", PlyType::i32},
+      {"int32", PlyType::i32},   {"uint", PlyType::u32},    {"uint32", PlyType::u32},
+      {"float", PlyType::f32},   {"float32", PlyType::f32}, {"double", PlyType::f64},
+      {"float64", PlyType::f64},
+  };
+  for (const Name& n : kNames)
+    if (n.name == s) {
+      t = n.type;
+      return true;
+    }
+  return false;
+}
+
+std::size_t ply_size(PlyType t) {
+  switch (t) {
+    case PlyType::i8:
+    case PlyType::u8:
+      return 1;
+    case PlyType::i16:
+    case PlyType::u16:
+      return 2;
+    case PlyType::i32:
+    case PlyType::u32:
+    case PlyType::f32:
+      return 4;
+    case PlyType::f64:
+      return 8;
+  }
+  return 0;
+}
+
+bool ply_is_integer(PlyType t) { return t != PlyType::f32 && t != PlyType::f64; }
+
+enum class PlyFormat { ascii, binary_le, binary_be };
+
+struct PlyProperty {
+  std::string name;
+  PlyType type = PlyType::f32;       ///< scalar type, or the item type of a list
+  bool is_list = false;
+  PlyType count_type = PlyType::u8;  ///< lists only
+  int role = -1;                     ///< vertex: 0/1/2 = x/y/z; face: 3 = the index list
+};
+
+struct PlyElement {
+  std::string name;
+  std::uint64_t count = 0;
+  std::uint64_t line = 0;
+  std::vector<PlyProperty> props;
+  std::size_t min_binary_size() const {
+    std::size_t s = 0;
+    for (const PlyProperty& p : props) s += ply_size(p.is_list ? p.count_type : p.type);
+    return s;
+  }
+};
+
+struct PlyHeader {
+  PlyFormat format = PlyFormat::ascii;
+  std::vector<PlyElement> elements;
+  std::size_t data_offset = 0;
+  std::uint64_t data_first_line = 0;
+};
+
+PlyHeader parse_ply_header(const std::string& path, std::string_view data) {
+  PlyHeader h;
+  bool have_format = false;
+  std::size_t pos = 0;
+  std::uint64_t ln = 0;
+  std::vector<std::string_view> tok;
+  for (;;) {
+    if (pos >= data.size())
+      throw InputError(path, ln, "PLY header has no 'end_header' line");
+    const std::size_t nl = data.find('\n', pos);
+    std::string_view line = data.substr(pos, nl == std::string_view::npos ? data.size() - pos : nl - pos);
+    pos = nl == std::string_view::npos ? data.size() : nl + 1;
+    ++ln;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (ln == 1) {
+      if (line != "ply") throw InputError(path, 1, "not a PLY file: the first line must be 'ply'");
+      continue;
+    }
+    tok.clear();
+    for (std::size_t i = 0; i < line.size();) {
+      while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+      const std::size_t s = i;
+      while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
+      if (i > s) tok.push_back(line.substr(s, i - s));
+    }
+    if (tok.empty()) continue;
+    auto bad = [&](const std::string& what) {
+      return InputError(path, ln, "bad PLY header line " + quote(line) + ": " + what);
+    };
+    const std::string_view key = tok[0];
+    if (key == "comment" || key == "obj_info") continue;
+    if (key == "end_header") break;
+    if (key == "format") {
+      if (have_format) throw bad("duplicate 'format' line");
+      if (tok.size() != 3) throw bad("expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
+      if (tok[1] == "ascii")
+        h.format = PlyFormat::ascii;
+      else if (tok[1] == "binary_little_endian")
+        h.format = PlyFormat::binary_le;
+      else if (tok[1] == "binary_big_endian")
+        h.format = PlyFormat::binary_be;
+      else
+        throw bad("unknown format " + quote(tok[1]));
+      if (tok[2] != "1.0") throw bad("unsupported PLY version " + quote(tok[2]));
+      have_format = true;
+    } else if (key == "element") {
+      PlyElement e;
+      if (tok.size() != 3 || !parse_integer(tok[2], e.count))
+        throw bad("expected 'element <name> <count>' with a non-negative count");
+      e.name = tok[1];
+      e.line = ln;
+      for (const PlyElement& o : h.elements)
+        if (o.name == e.name) throw bad("duplicate element " + quote(e.name));
+      h.elements.push_back(std::move(e));
+    } else if (key == "property") {
+      if (h.elements.empty()) throw bad("property declared before any element");
+      PlyProperty p;
+      if (tok.size() == 5 && tok[1] == "list") {
+        p.is_list = true;
+        if (!parse_ply_type(tok[2], p.count_type) || !ply_is_integer(p.count_type))
+          throw bad("list count type " + quote(tok[2]) + " is not an integer type");
+        if (!parse_ply_type(tok[3], p.type)) throw bad("unknown type " + quote(tok[3]));
+        p.name = tok[4];
+      } else if (tok.size() == 3) {
+        if (!parse_ply_type(tok[1], p.type)) throw bad("unknown type " + quote(tok[1]));
+        p.name = tok[2];
+      } else {
+        throw bad("expected 'property <type> <name>' or 'property list <type> <type> <name>'");
+      }
+      PlyElement& e = h.elements.back();
+      for (const PlyProperty& q : e.props)
+        if (q.name == p.name) throw bad("duplicate property " + quote(p.name));
+      if (e.name == "vertex" && (p.name == "x" || p.name == "y" || p.name == "z")) {
+        if (p.is_list) throw bad("vertex coordinate " + quote(p.name) + " must be a scalar");
+        p.role = p.name[0] - 'x';
+      }
+      if (e.name == "face" && (p.name == "vertex_indices" || p.name == "vertex_index")) {
+        if (!p.is_list) throw bad("face property " + quote(p.name) + " must be a list");
+        if (!ply_is_integer(p.type)) throw bad("vertex indices must have an integer type");
+        for (const PlyProperty& q : e.props)
+          if (q.role == 3) throw bad("two vertex index lists in 'face'");
+        p.role = 3;
+      }
+      e.props.push_back(std::move(p));
+    } else {
+      throw bad("unknown keyword " + quote(key));
+    }
+  }
+  if (!have_format) throw InputError(path, 0, "PLY header has no 'format' line");
+  h.data_offset = pos;
+  h.data_first_line = ln + 1;
+  return h;
+}
+
+template <class U>
+U load_raw(const unsigned char* p, bool swap) {
+  U u;
+  std::memcpy(&u, p, sizeof u);
+  if (swap) u = bswap(u);
+  return u;
+}
+
+double load_ply_double(const unsigned char* p, PlyType t, bool swap) {
+  switch (t) {
+    case PlyType::i8:
+      return std::int8_t(*p);
+    case PlyType::u8:
+      return *p;
+    case PlyType::i16:
+      return std::int16_t(load_raw<std::uint16_t>(p, swap));
+    case PlyType::u16:
+      return load_raw<std::uint16_t>(p, swap);
+    case PlyType::i32:
+      return std::int32_t(load_raw<std::uint32_t>(p, swap));
+    case PlyType::u32:
+      return load_raw<std::uint32_t>(p, swap);
+    case PlyType::f32:
+      return std::bit_cast<float>(load_raw<std::uint32_t>(p, swap));
+    case PlyType::f64:
+      return std::bit_cast<double>(load_raw<std::uint64_t>(p, swap));
+  }
+  return 0;
+}
+
+/// An integer item (index or list length) as int64; exact for every integer PLY type.
+std::int64_t load_ply_int(const unsigned char* p, PlyType t, bool swap) {
+  switch (t) {
+    case PlyType::i8:
+      return std::int8_t(*p);
+    case PlyType::u8:
+      return *p;
+    case PlyType::i16:
+      return std::int16_t(load_raw<std::uint16_t>(p, swap));
+    case PlyType::u16:
+      return load_raw<std::uint16_t>(p, swap);
+    case PlyType::i32:
+      return std::int32_t(load_raw<std::uint32_t>(p, swap));
+    case PlyType::u32:
+      return load_raw<std::uint32_t>(p, swap);
+    default:
+      return -1;
+  }
+}
+
+/// Collects faces (file vertex indices) and fan-triangulates them into `tris`.
+struct FaceSink {
+  const std::string& path;
+  std::uint64_t num_vertices;
+  std::vector<std::uint32_t>& tris;
+  std::vector<std::uint32_t> poly;
+
+  /// `where`: "line N" / "byte offset N" context for messages (built lazily by the caller).
+  template <class Where>
+  void finish(std::uint64_t face, std::uint64_t line, Where where) {
+    if (poly.size() < 3)
+      throw InputError(path, line,
+                       "face " + std::to_string(face) + " (0-based" + where() + ") has " +
+                           std::to_string(poly.size()) + " vertices; at least 3 are needed");
+    for (std::size_t k = 1; k + 1 < poly.size(); ++k) {
+      tris.push_back(poly[0]);
+      tris.push_back(poly[k]);
+      tris.push_back(poly[k + 1]);
+    }
+    poly.clear();
+  }
+  template <class Where>
+  void index(std::int64_t v, std::uint64_t face, std::uint64_t line, Where where) {
+    if (v < 0 || std::uint64_t(v) >= num_vertices)
+      throw InputError(path, line,
+                       "face " + std::to_string(face) + " (0-based" + where() +
+                           "): vertex index " + std::to_string(v) + " is out of range (" +
+                           std::to_string(num_vertices) + " vertices)");
+    poly.push_back(std::uint32_t(v));
+  }
+};
+
+SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
+  const PlyHeader h = parse_ply_header(path, data);
+  const PlyElement* vert_el = nullptr;
+  const PlyElement* face_el = nullptr;
+  for (const PlyElement& e : h.elements) {
+    if (e.name == "vertex") vert_el = &e;
+    if (e.name == "face") face_el = &e;
+  }
+  if (!vert_el) throw InputError(path, 0, "PLY file has no 'vertex' element");
+  for (int c = 0; c < 3; ++c)
+    if (std::none_of(vert_el->props.begin(), vert_el->props.end(),
+                     [&](const PlyProperty& p) { return p.role == c; }))
+      throw InputError(path, vert_el->line,
+                       std::string("'vertex' element has no '") + char('x' + c) + "' property");
+  if (!face_el) throw InputError(path, 0, "PLY file has no 'face' element (a point cloud, not a surface)");
+  if (std::none_of(face_el->props.begin(), face_el->props.end(),
+                   [](const PlyProperty& p) { return p.role == 3; }))
+    throw InputError(path, face_el->line,
+                     "'face' element has no 'vertex_indices' (or 'vertex_index') list property");
+  if (vert_el->count > 0xFFFFFFFFull)
+    throw InputError(path, vert_el->line, "more than 2^32-1 vertices");
+
+  const std::size_t nbytes = data.size() - h.data_offset;
+  // Counts the file cannot hold are rejected before anything is allocated from them.
+  for (const PlyElement& e : h.elements) {
+    const std::uint64_t min_size = h.format == PlyFormat::ascii ? 2 * e.props.size() : e.min_binary_size();
+    if (min_size > 0 && e.count > (nbytes + 1) / min_size)
+      throw InputError(path, e.line,
+                       "element '" + e.name + "' declares " + std::to_string(e.count) +
+                           " records of at least " + std::to_string(min_size) +
+                           " bytes, but the data section has only " + std::to_string(nbytes) +
+                           " bytes (truncated or corrupt file)");
+  }
+
+  SurfaceMesh mesh;
+  std::vector<double> raw(3 * vert_el->count);
+  mesh.tris.reserve(3 * face_el->count);
+  FaceSink sink{path, vert_el->count, mesh.tris, {}};
+
+  if (h.format == PlyFormat::ascii) {
+    Tokens tok(data.substr(h.data_offset), h.data_first_line);
+    std::uint64_t prev_line = 0;
+    std::string prev_name;
+    for (const PlyElement& e : h.elements) {
+      const bool is_vert = &e == vert_el, is_face = &e == face_el;
+      for (std::uint64_t i = 0; i < e.count; ++i) {
+        auto eof = [&] {
+          return InputError(path, tok.line(),
+                            "unexpected end of file in element '" + e.name + "' record " +
+                                std::to_string(i) + " (0-based) of " + std::to_string(e.count));
+        };
+        std::uint64_t line = 0;
+        auto where = [] { return std::string(); };
+        // One record per line: a record's values all sit on one line, after the previous one's.
+        auto value = [&] {
+          const std::string_view t = tok.next();
+          if (t.empty()) throw eof();
+          if (line == 0) {
+            if (tok.line() == prev_line)
+              throw InputError(path, prev_line,
+                               "more values on the line than the properties of element '" +
+                                   prev_name + "' declare");
+            line = tok.line();
+          } else if (tok.line() != line) {
+            throw InputError(path, line, "element '" + e.name + "' record " + std::to_string(i) +
+                                             " (0-based): too few values on the line");
+          }
+          return t;
+        };
+        for (const PlyProperty& p : e.props) {
+          std::string_view t = value();
+          if (!p.is_list) {
+            double v;
+            if (!parse_double(t, v))
+              throw InputError(path, line, "element '" + e.name + "' record " + std::to_string(i) +
+                                               ": property '" + p.name + "' value " + quote(t) +
+                                               " is not a number");
+            if (is_vert && p.role >= 0) {
+              if (!std::isfinite(v))
+                throw InputError(path, line, "vertex " + std::to_string(i) +
+                                                 " (0-based): non-finite coordinate " + p.name + " = " + quote(t));
+              raw[3 * i + std::size_t(p.role)] = v;
+            }
+            continue;
+          }
+          std::uint64_t n;
+          if (!parse_integer(t, n))
+            throw InputError(path, line, "element '" + e.name + "' record " + std::to_string(i) +
+                                             ": list length " + quote(t) + " is not a non-negative integer");
+          if (n > tok.remaining()) throw eof();
+          for (std::uint64_t k = 0; k < n; ++k) {
+            t = value();
+            if (is_face && p.role == 3) {
+              std::int64_t v;
+              if (!parse_integer(t, v))
+                throw InputError(path, line, "face " + std::to_string(i) + " (0-based): vertex index " +
+                                                 quote(t) + " is not an integer");
+              sink.index(v, i, line, where);
+            } else {
+              double v;
+              if (!parse_double(t, v))
+                throw InputError(path, line, "element '" + e.name + "' record " + std::to_string(i) +
+                                                 ": list item " + quote(t) + " is not a number");
+            }
+          }
+        }
+        if (is_face) sink.finish(i, line, where);
+        if (line != 0) {
+          prev_line = line;
+          prev_name = e.name;
+        }
+      }
+    }
+    if (!tok.next().empty())
+      throw InputError(path, tok.line(), "unexpected data after the last declared element");
+  } else {
+    const bool swap = (h.format == PlyFormat::binary_le) != (std::endian::native == std::endian::little);
+    const auto* base = reinterpret_cast<const unsigned char*>(data.data());
+    const unsigned char* p = base + h.data_offset;
+    const unsigned char* end = base + data.size();
+    for (const PlyElement& e : h.elements) {
+      const bool is_vert = &e == vert_el, is_face = &e == face_el;
+      for (std::uint64_t i = 0; i < e.count; ++i) {
+        const std::size_t rec_offset = std::size_t(p - base);
+        auto where = [&] { return ", byte offset " + std::to_string(rec_offset); };
+        auto truncated = [&] {
+          return InputError(path, 0,
+                            "truncated file: element '" + e.name + "' record " + std::to_string(i) +
+                                " (0-based, byte offset " + std::to_string(rec_offset) + ") of " +
+                                std::to_string(e.count) + " runs past the end of the file");
+        };
+        for (const PlyProperty& prop : e.props) {
+          if (!prop.is_list) {
+            const std::size_t size = ply_size(prop.type);
+            if (std::size_t(end - p) < size) throw truncated();
+            if (is_vert && prop.role >= 0) {
+              const double v = load_ply_double(p, prop.type, swap);
+              if (!std::isfinite(v))
+                throw InputError(path, 0, "vertex " + std::to_string(i) + " (0-based, byte offset " +
+                                              std::to_string(p - base) + "): non-finite coordinate " +
+                                              prop.name);
+              raw[3 * i + std::size_t(prop.role)] = v;
+            }
+            p += size;
+            continue;
+          }
+          const std::size_t csize = ply_size(prop.count_type);
+          if (std::size_t(end - p) < csize) throw truncated();
+          const std::int64_t n = load_ply_int(p, prop.count_type, swap);
+          if (n < 0)
+            throw InputError(path, 0, "element '" + e.name + "' record " + std::to_string(i) +
+                                          " (0-based" + where() + "): negative list length");
+          p += csize;
+          const std::size_t isize = ply_size(prop.type);
+          if (std::uint64_t(n) > std::size_t(end - p) / isize) throw truncated();
+          if (is_face && prop.role == 3)
+            for (std::int64_t k = 0; k < n; ++k) sink.index(load_ply_int(p + k * isize, prop.type, swap), i, 0, where);
+          p += std::size_t(n) * isize;
+        }
+        if (is_face) sink.finish(i, 0, where);
+      }
+    }
+  }
+  if (mesh.tris.size() / 3 > 0xFFFFFFFFull) throw InputError(path, 0, "more than 2^32-1 triangles");
+
+  // Weld and renumber.
+  const std::size_t nv = vert_el->count;
+  std::vector<std::uint32_t> remap(nv);
+  Welder weld(mesh.points, nv);
+  for (std::size_t i = 0; i < nv; ++i) remap[i] = weld.add(raw[3 * i], raw[3 * i + 1], raw[3 * i + 2]);
+  for (std::uint32_t& v : mesh.tris) v = remap[v];
+  // Points no facet uses (e.g. welded away or unreferenced in the file) are kept: the point
+  // ids are the welded file order; prepare_surface decides what unused points mean.
+  return mesh;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writers
+// ---------------------------------------------------------------------------------------------
+
+void check_writable(const SurfaceMesh& mesh, const char* who) {
+  const std::size_t n = mesh.points.size();
+  for (std::size_t i = 0; i < mesh.points.xyz.size(); ++i)
+    if (!std::isfinite(mesh.points.xyz[i]))
+      throw UsageError(std::string(who) + ": point " + std::to_string(i / 3) + " has a non-finite coordinate");
+  if (mesh.tris.size() % 3 != 0) throw UsageError(std::string(who) + ": tris.size() is not a multiple of 3");
+  for (std::size_t i = 0; i < mesh.tris.size(); ++i)
+    if (mesh.tris[i] >= n)
+      throw UsageError(std::string(who) + ": facet " + std::to_string(i / 3) + " refers to point " +
+                       std::to_string(mesh.tris[i]) + " of " + std::to_string(n));
+  if (mesh.num_tris() > 0xFFFFFFFFull) throw UsageError(std::string(who) + ": more than 2^32-1 facets");
+}
+
+/// Writes `bytes` to a temporary file and renames it over `path`.
+void write_atomic(const std::string& path, const std::string& bytes) {
+  AtomicFile file(path);
+  const int fd = ::open(file.temp_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) throw OutputError(path, std::string("cannot create: ") + std::strerror(errno));
+  FdGuard guard{fd};
+  const char* p = bytes.data();
+  std::size_t n = bytes.size();
+  while (n > 0) {
+    const ssize_t w = ::write(fd, p, n);
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      throw OutputError(path, std::string("write failed: ") + std::strerror(errno));
+    }
+    p += w;
+    n -= std::size_t(w);
+  }
+  guard.fd = -1;
+  if (::close(fd) != 0) throw OutputError(path, std::string("close failed: ") + std::strerror(errno));
+  file.commit();
+}
+
+template <class T>
+void put_le(std::string& out, T v) {
+  using U = std::conditional_t<sizeof(T) == 1, std::uint8_t,
+                               std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>>;
+  U u = std::bit_cast<U>(v);
+  if constexpr (sizeof(T) > 1 && std::endian::native == std::endian::big) u = bswap(u);
+  char b[sizeof u];
+  std::memcpy(b, &u, sizeof u);
+  out.append(b, sizeof u);
+}
+
+void put_double(std::string& out, double v) {
+  char b[32];
+  out.append(b, std::to_chars(b, b + sizeof b, v).ptr);
+}
+
+/// Unit normal of facet f in float (zero for a degenerate facet), for STL.
+void facet_normal(const SurfaceMesh& m, std::size_t f, float n[3]) {
+  const double* a = m.points.p(m.tri(f)[0]);
+  const double* b = m.points.p(m.tri(f)[1]);
+  const double* c = m.points.p(m.tri(f)[2]);
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2], z = u[0] * v[1] - u[1] * v[0];
+  const double len = std::sqrt(x * x + y * y + z * z);
+  if (!(len > 0) || !std::isfinite(len)) {
+    x = y = z = 0;
+  } else {
+    x /= len;
+    y /= len;
+    z /= len;
+  }
+  n[0] = float(x);
+  n[1] = float(y);
+  n[2] = float(z);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Public API
+// ---------------------------------------------------------------------------------------------
+
+SurfaceMesh read_surface(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext == ".stl") return read_stl(path);
+  if (ext == ".ply") return read_ply(path);
+  throw InputError(path, 0, "unknown surface file extension " + quote(ext) + " (supported: .stl, .ply)");
+}
+
+SurfaceMesh read_stl(const std::string& path) {
+  const std::string data = read_whole_file(path);
+  // The size rule alone decides binary: 84 + 50 * count == file size.
+  if (data.size() >= 84) {
+    const std::uint32_t count =
+        load_le<std::uint32_t>(reinterpret_cast<const unsigned char*>(data.data()) + 80);
+    const std::uint64_t expect = 84 + 50 * std::uint64_t(count);
+    if (expect == data.size()) return read_stl_binary(path, data);
+    // Not a binary STL by size. An ascii STL starts with "solid" and holds text only.
+    std::size_t i = 0;
+    while (i < data.size() && std::isspace(static_cast<unsigned char>(data[i]))) ++i;
+    const bool solid = data.size() - i >= 5 && iequals(std::string_view(data).substr(i, 5), "solid");
+    const bool has_nul = std::memchr(data.data(), '\0', std::min<std::size_t>(data.size(), 4096)) != nullptr;
+    if (!solid || has_nul)
+      throw InputError(path, 0,
+                       "not a valid STL file: as binary STL its header (byte offset 80) declares " +
+                           std::to_string(count) + " triangles, which needs " +
+                           std::to_string(expect) + " bytes, but the file has " +
+                           std::to_string(data.size()) +
+                           " bytes (truncated, or a wrong triangle count); it is not ascii STL either" +
+                           (solid ? " (it contains binary NUL bytes)" : " (it does not start with 'solid')"));
+  }
+  return read_stl_ascii(path, data);
+}
+
+SurfaceMesh read_ply(const std::string& path) {
+  const std::string data = read_whole_file(path);
+  return read_ply_data(path, data);
+}
+
+void write_stl(const SurfaceMesh& mesh, const std::string& path, bool binary) {
+  check_writable(mesh, "write_stl");
+  std::string out;
+  if (binary) {
+    // Binary STL stores float coordinates: doubles are rounded to the nearest float.
+    out.reserve(84 + 50 * mesh.num_tris());
+    std::string header = "kdmesh binary STL";  // never "solid...": some readers sniff for it
+    header.resize(80, ' ');
+    out += header;
+    put_le(out, std::uint32_t(mesh.num_tris()));
+    for (std::size_t f = 0; f < mesh.num_tris(); ++f) {
+      float n[3];
+      facet_normal(mesh, f, n);
+      for (float v : n) put_le(out, v);
+      for (int k = 0; k < 3; ++k)
+        for (int j = 0; j < 3; ++j) put_le(out, float(mesh.points.p(mesh.tri(f)[k])[j]));
+      out.append(2, '\0');
+    }
+  } else {
+    // Ascii STL with shortest round-trip doubles: reading it back gives the exact coordinates.
+    out += "solid kdmesh\n";
+    for (std::size_t f = 0; f < mesh.num_tris(); ++f) {
+      float n[3];
+      facet_normal(mesh, f, n);
+      out += "  facet normal ";
+      for (int j = 0; j < 3; ++j) {
+        put_double(out, n[j]);
+        out += j < 2 ? ' ' : '\n';
+      }
+      out += "    outer loop\n";
+      for (int k = 0; k < 3; ++k) {
+        out += "      vertex ";
+        for (int j = 0; j < 3; ++j) {
+          put_double(out, mesh.points.p(mesh.tri(f)[k])[j]);
+          out += j < 2 ? ' ' : '\n';
+        }
+      }
+      out += "    endloop\n  endfacet\n";
+    }
+    out += "endsolid kdmesh\n";
+  }
+  write_atomic(path, out);
+}
+
+void write_ply(const SurfaceMesh& mesh, const std::string& path, bool binary) {
+  check_writable(mesh, "write_ply");
+  const bool big = mesh.points.size() > 0x7FFFFFFFull;
+  std::string out = "ply\nformat ";
+  out += binary ? "binary_little_endian" : "ascii";
+  out += " 1.0\ncomment kdmesh surface\nelement vertex " + std::to_string(mesh.points.size()) +
+         "\nproperty double x\nproperty double y\nproperty double z\nelement face " +
+         std::to_string(mesh.num_tris()) + "\nproperty list uchar " + (big ? "uint" : "int") +
+         " vertex_indices\nend_header\n";
+  if (binary) {
+    out.reserve(out.size() + 24 * mesh.points.size() + 13 * mesh.num_tris());
+    for (double v : mesh.points.xyz) put_le(out, v);
+    for (std::size_t f = 0; f < mesh.num_tris(); ++f) {
+      out.push_back(char(3));
+      for (int k = 0; k < 3; ++k) put_le(out, mesh.tri(f)[k]);
+    }
+  } else {
+    for (std::size_t i = 0; i < mesh.points.size(); ++i) {
+      for (int j = 0; j < 3; ++j) {
+        put_double(out, mesh.points.p(std::uint32_t(i))[j]);
+        out += j < 2 ? ' ' : '\n';
+      }
+    }
+    for (std::size_t f = 0; f < mesh.num_tris(); ++f)
+      out += "3 " + std::to_string(mesh.tri(f)[0]) + " " + std::to_string(mesh.tri(f)[1]) + " " +
+             std::to_string(mesh.tri(f)[2]) + "\n";
+  }
+  write_atomic(path, out);
+}
+
+}  // namespace kdmesh
