@@ -10,9 +10,14 @@
 //   * Its PLY reader hands the header's element counts to BaseImporter::reserve before any data
 //     is read, so the sizes it trusts are the ones a lying header chooses; checking them
 //     against the file size first would mean re-parsing the header ourselves anyway.
+//   * Measured with OpenMesh::IO::read_mesh into a TriMesh (OpenMesh 9.0-4, 2026-11-21): a
+//     binary STL that declares 4,000,000,000 triangles and holds 1 returns true with 0 faces
+//     (a silent empty result), and three facets on one edge return true with the edge split by
+//     duplicated vertices (8 points instead of 5) and only "complex edge" on stderr; the
+//     validation below must see such defects, not a repaired copy.
 // So every format here is parsed from one in-memory copy of the file, every count is checked
 // against the bytes that remain BEFORE anything is allocated from it, and errors are typed.
-// OpenMesh stays linked to io/ (CMake) for later adapters; this file does not include it.
+// kdmesh therefore does not link OpenMesh.
 //
 // Welding: points with bit-identical coordinates (after mapping -0.0 to +0.0) become one
 // point, through an open-addressing hash table (O(n)); facets keep file order and orientation.

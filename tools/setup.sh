@@ -32,7 +32,6 @@ PACKAGES=(
   libfmt-dev
   libgmp-dev
   libgtest-dev
-  libopenmesh-dev
   libtbb-dev
   libtet1.5-dev
   libvtk9-dev

@@ -31,8 +31,8 @@ declare -A LIBS=(
 )
 # Targets whose sources exist in this tree (surface readers and the YAML loader are added
 # here as they land).
-[ -f tests/fuzz/fuzz_stl.cpp ] && SOURCES[stl]="io/surface_io.cpp" && LIBS[stl]="${SURFACE_LIBS:--lOpenMeshCore}"
-[ -f tests/fuzz/fuzz_ply_surface.cpp ] && SOURCES[ply_surface]="io/surface_io.cpp" && LIBS[ply_surface]="${SURFACE_LIBS:--lOpenMeshCore}"
+[ -f tests/fuzz/fuzz_stl.cpp ] && SOURCES[stl]="io/surface_io.cpp" && LIBS[stl]=""
+[ -f tests/fuzz/fuzz_ply_surface.cpp ] && SOURCES[ply_surface]="io/surface_io.cpp" && LIBS[ply_surface]=""
 [ -f tests/fuzz/fuzz_config.cpp ] && SOURCES[config]="tools/lib/job_config.cpp" && LIBS[config]="-lyaml-cpp"
 
 targets=("$@")
