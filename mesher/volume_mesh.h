@@ -32,12 +32,23 @@ struct VolumeMeshStats {
   std::size_t steiner_points = 0;     ///< surface points added to recover the boundary
   std::size_t dropped_nodes = 0;      ///< interior nodes too close to the surface, removed
   int rounds = 0;                     ///< Steiner rounds used
+  int insert_rounds = 0;              ///< of those, rounds that inserted the Steiner points into the
+                                      ///< existing triangulation (the others, with dropped nodes, rebuilt it)
+  std::size_t unused_nodes = 0;       ///< nodes no inside tet uses (e.g. exact duplicates), removed
   DelaunayStats delaunay;             ///< of the first (full) tetrahedralization
+  /// Summed over all rounds (the Delaunay / order time of the first round is delaunay.seconds).
   double order_seconds = 0, delaunay_seconds = 0, classify_seconds = 0, recover_seconds = 0;
+  double region_seconds = 0;          ///< region flood fill and output compaction
+  double total_seconds = 0;           ///< all of mesh_volume
+  std::size_t classified_tets = 0;    ///< tets classified, summed over rounds
+  std::size_t side_queries = 0;       ///< exact inside/outside queries made by the classification
+  std::size_t rim_flips = 0;          ///< tets with an interior vertex whose own query said outside
 };
 
-/// The tets inside the solid. Points are the input nodes followed by the Steiner points;
-/// point ids refer to `nodes`. Every tet is positively oriented.
+/// The tets inside the solid. `nodes` are the input nodes that are kept, in input order
+/// (interior nodes dropped for being too close to the surface and nodes no inside tet uses
+/// are removed), followed by the Steiner points; point ids refer to `nodes`. Every tet is
+/// positively oriented.
 struct VolumeMesh {
   NodeSet nodes;                          ///< input nodes + Steiner points (kind surface/edge)
   std::vector<std::uint32_t> tets;        ///< 4 node ids per tet

@@ -1,0 +1,184 @@
+// kdmesh — boundary faces of the inside tets, their distance/orientation judgement against the
+// surface, and the closed-2-manifold test.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/boundary_faces.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "mesher/parallel_for.h"
+
+namespace kdmesh {
+
+BoundaryFaces boundary_faces(const Triangulation& tri, const std::vector<std::uint8_t>& inside) {
+  BoundaryFaces bf;
+  const std::size_t n = tri.num_tets();
+  for (std::size_t t = 0; t < n; ++t) {
+    if (!inside[t]) continue;
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t u = tri.adj(t, i) >> 2;
+      if (inside[u]) continue;
+      for (int j = 0; j < 3; ++j) bf.verts.push_back(tri.v(t, kTetFace[i][j]));
+      bf.tet.push_back(std::uint32_t(t));
+      bf.face.push_back(std::uint8_t(i));
+    }
+  }
+  return bf;
+}
+
+bool triangle_circumcentre(const double* a, const double* b, const double* c, double* out) {
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const double w[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  const double w2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+  if (!(w2 > 0)) return false;
+  const double u2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+  const double v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+  // a + (|u|^2 (v x w) + |v|^2 (w x u)) / (2 |w|^2), w = u x v
+  const double vw[3] = {v[1] * w[2] - v[2] * w[1], v[2] * w[0] - v[0] * w[2], v[0] * w[1] - v[1] * w[0]};
+  const double wu[3] = {w[1] * u[2] - w[2] * u[1], w[2] * u[0] - w[0] * u[2], w[0] * u[1] - w[1] * u[0]};
+  for (int k = 0; k < 3; ++k) out[k] = a[k] + (u2 * vw[k] + v2 * wu[k]) / (2 * w2);
+  return std::isfinite(out[0]) && std::isfinite(out[1]) && std::isfinite(out[2]);
+}
+
+ManifoldDefects manifold_defects(const std::vector<std::uint32_t>& verts) {
+  ManifoldDefects d;
+  const std::size_t nf = verts.size() / 3;
+  // Edges: (key, face), sorted; runs of equal keys.
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;
+  edges.reserve(3 * nf);
+  for (std::size_t f = 0; f < nf; ++f)
+    for (int j = 0; j < 3; ++j) {
+      std::uint32_t a = verts[3 * f + j], b = verts[3 * f + (j + 1) % 3];
+      if (a > b) std::swap(a, b);
+      edges.push_back({(std::uint64_t(a) << 32) | b, std::uint32_t(f)});
+    }
+  std::sort(edges.begin(), edges.end());
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+    if (j - i != 2) {
+      d.bad_edges.push_back(std::uint32_t(edges[i].first >> 32));
+      d.bad_edges.push_back(std::uint32_t(edges[i].first));
+      for (std::size_t k = i; k < j; ++k) d.faces_at_bad_edges.push_back(edges[k].second);
+    }
+    i = j;
+  }
+  // Vertices: the link of v (the edges opposite v in its faces) must be one cycle.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> vf;
+  vf.reserve(3 * nf);
+  for (std::size_t f = 0; f < nf; ++f)
+    for (int j = 0; j < 3; ++j) vf.push_back({verts[3 * f + j], std::uint32_t(f)});
+  std::sort(vf.begin(), vf.end());
+  std::vector<std::uint32_t> ids, parent;
+  auto find = [&](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  auto local = [&](std::uint32_t p) {
+    for (std::size_t k = 0; k < ids.size(); ++k)
+      if (ids[k] == p) return std::uint32_t(k);
+    ids.push_back(p);
+    parent.push_back(std::uint32_t(ids.size() - 1));
+    return std::uint32_t(ids.size() - 1);
+  };
+  for (std::size_t i = 0; i < vf.size();) {
+    std::size_t j = i;
+    while (j < vf.size() && vf[j].first == vf[i].first) ++j;
+    const std::uint32_t v = vf[i].first;
+    ids.clear();
+    parent.clear();
+    for (std::size_t k = i; k < j; ++k) {
+      const std::uint32_t* t = &verts[3 * std::size_t(vf[k].second)];
+      std::uint32_t o[2], m = 0;
+      for (int q = 0; q < 3; ++q)
+        if (t[q] != v) o[m++] = t[q];
+      const std::uint32_t x = find(local(o[0])), y = find(local(o[1]));
+      if (x != y) parent[x] = y;
+    }
+    std::size_t roots = 0;
+    for (std::size_t k = 0; k < ids.size(); ++k) roots += find(std::uint32_t(k)) == k;
+    if (roots > 1) {
+      d.bad_vertices.push_back(v);
+      for (std::size_t k = i; k < j; ++k) d.faces_at_bad_vertices.push_back(vf[k].second);
+    }
+    i = j;
+  }
+  return d;
+}
+
+BoundaryJudgement judge_boundary(const BoundaryFaces& faces, const NodeSet& nodes,
+                                 const PreparedSurface& surface,
+                                 const SurfaceQuery& query, const SizingField& sizing,
+                                 double tolerance) {
+  const std::size_t nf = faces.size();
+  std::vector<std::uint8_t> why(nf, 0);  // bit 0 interior vertex, 1 far, 2 facing inward
+  std::vector<float> how_far(nf, 0);
+  const SurfaceMesh& sm = surface.mesh;
+  auto facet_normal = [&](std::uint32_t f, double* n) {
+    const std::uint32_t* t = sm.tri(f);
+    const double *a = sm.points.p(t[0]), *b = sm.points.p(t[1]), *c = sm.points.p(t[2]);
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    n[0] = u[1] * v[2] - u[2] * v[1];
+    n[1] = u[2] * v[0] - u[0] * v[2];
+    n[2] = u[0] * v[1] - u[1] * v[0];
+  };
+  parallel_for(nf, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t f = b; f < e; ++f) {
+      const std::uint32_t* fv = &faces.verts[3 * f];
+      std::uint8_t w = 0;
+      for (int j = 0; j < 3; ++j)
+        if (nodes.kind[fv[j]] == NodeKind::interior) w |= 1;
+      if (w) {
+        why[f] = w;
+        continue;
+      }
+      const double *p0 = nodes.points.p(fv[0]), *p1 = nodes.points.p(fv[1]), *p2 = nodes.points.p(fv[2]);
+      const double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+      const double v[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+      const double fn[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+      double c[3];
+      for (int k = 0; k < 3; ++k) c[k] = (p0[k] + p1[k] + p2[k]) / 3;
+      std::uint32_t facet = nodes.facet[fv[0]];
+      double dmax = 0;
+      const bool one_facet = facet != kNoFacet && nodes.facet[fv[1]] == facet && nodes.facet[fv[2]] == facet;
+      if (!one_facet) {
+        // The three vertices are not on one facet (a convex set): measure the distances.
+        double cp[3];
+        dmax = query.closest(c, cp, &facet);
+        const double* ends[3][2] = {{p0, p1}, {p1, p2}, {p2, p0}};
+        for (auto& ed : ends) {
+          const double m[3] = {(ed[0][0] + ed[1][0]) / 2, (ed[0][1] + ed[1][1]) / 2, (ed[0][2] + ed[1][2]) / 2};
+          dmax = std::max(dmax, query.distance(m));
+        }
+      }
+      const double h = sizing(c);
+      if (dmax > tolerance * h) w |= 2;
+      how_far[f] = float(dmax / h);
+      double n[3];
+      facet_normal(facet, n);
+      if (fn[0] * n[0] + fn[1] * n[1] + fn[2] * n[2] < 0) w |= 4;
+      why[f] = w;
+    }
+  }, 256);
+  BoundaryJudgement j;
+  for (std::size_t f = 0; f < nf; ++f) {
+    if (!why[f]) continue;
+    j.bad_faces.push_back(std::uint32_t(f));
+    std::ostringstream r;
+    if (why[f] & 1) r << "interior-kind vertex on the boundary";
+    if (why[f] & 2) r << (r.tellp() ? ", " : "") << "distance " << how_far[f] << " h from the surface";
+    if (why[f] & 4) r << (r.tellp() ? ", " : "") << "faces against the closest facet";
+    j.reasons.push_back(r.str());
+  }
+  ManifoldDefects d = manifold_defects(faces.verts);
+  j.bad_edges = std::move(d.bad_edges);
+  j.bad_vertices = std::move(d.bad_vertices);
+  j.faces_at_bad_edges = std::move(d.faces_at_bad_edges);
+  j.faces_at_bad_vertices = std::move(d.faces_at_bad_vertices);
+  return j;
+}
+
+}  // namespace kdmesh

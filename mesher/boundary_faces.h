@@ -1,0 +1,63 @@
+// kdmesh — boundary faces of a set of inside tets, and their judgement against the surface
+// (used by the volume mesher's boundary recovery).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/tet_mesh.h"
+#include "mesher/node_set.h"
+#include "mesher/surface_prepare.h"
+#include "mesher/surface_query.h"
+#include "sizing/sizing_field.h"
+
+namespace kdmesh {
+
+/// Outward faces of tet t, by the index i of the vertex each is opposite to: for a positively
+/// oriented tet, (v[kTetFace[i][0]], v[kTetFace[i][1]], v[kTetFace[i][2]]) has its normal
+/// (b-a)x(c-a) pointing away from v[i].
+inline constexpr int kTetFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+/// The faces between an inside tet and an outside or infinite one. F faces:
+struct BoundaryFaces {
+  std::vector<std::uint32_t> verts;  ///< 3F point ids, normal pointing out of the inside tet
+  std::vector<std::uint32_t> tet;    ///< F: the inside tet (index in the Triangulation)
+  std::vector<std::uint8_t> face;    ///< F: which face of it (opposite v(tet, face))
+  std::size_t size() const { return tet.size(); }
+};
+
+/// `inside`: one flag per tet of `tri` (infinite tets must be 0).
+BoundaryFaces boundary_faces(const Triangulation& tri, const std::vector<std::uint8_t>& inside);
+
+/// What is wrong with a boundary (indices into BoundaryFaces; point ids for edges/vertices).
+struct BoundaryJudgement {
+  std::vector<std::uint32_t> bad_faces;  ///< interior vertex, beyond tolerance, or facing inward
+  std::vector<std::string> reasons;      ///< one per bad face
+  std::vector<std::uint32_t> bad_edges;  ///< 2 point ids per edge in != 2 boundary faces
+  std::vector<std::uint32_t> bad_vertices;  ///< vertices whose boundary faces form > 1 fan
+  std::vector<std::uint32_t> faces_at_bad_edges, faces_at_bad_vertices;  ///< faces around them
+};
+
+/// Judges each face: bad if (a) a vertex is interior-kind, (b) its centroid or an edge midpoint
+/// is farther than tolerance * h(centroid) from the surface, (c) its normal points against
+/// the normal of the facet closest to its centroid. Then checks the faces form a closed
+/// 2-manifold (every edge in exactly 2 faces, one fan of faces around every vertex).
+/// Parallel over faces.
+BoundaryJudgement judge_boundary(const BoundaryFaces& faces, const NodeSet& nodes,
+                                 const PreparedSurface& surface,
+                                 const SurfaceQuery& query, const SizingField& sizing,
+                                 double tolerance);
+
+/// Edges in != 2 faces (2 ids each) and vertices with > 1 fan, of the triangles `verts`
+/// (3 point ids each). Also returns, for each, the indices of the faces around it.
+struct ManifoldDefects {
+  std::vector<std::uint32_t> bad_edges, bad_vertices;
+  std::vector<std::uint32_t> faces_at_bad_edges, faces_at_bad_vertices;
+};
+ManifoldDefects manifold_defects(const std::vector<std::uint32_t>& verts);
+
+/// Circumcentre of triangle (a,b,c) into out; false if the triangle is degenerate.
+bool triangle_circumcentre(const double* a, const double* b, const double* c, double* out);
+
+}  // namespace kdmesh
