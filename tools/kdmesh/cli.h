@@ -33,5 +33,7 @@ using Runner = std::function<int()>;
 void add_points_command(CLI::App& app, Runner& run);
 void add_delaunay_command(CLI::App& app, Runner& run);
 void add_bench_command(CLI::App& app, Runner& run);
+void add_mesh_command(CLI::App& app, Runner& run);
+void add_batch_command(CLI::App& app, Runner& run);
 
 }  // namespace kdmesh::cli

@@ -14,6 +14,8 @@ int main(int argc, char** argv) {
   kdmesh::cli::Runner run;
   kdmesh::cli::add_points_command(app, run);
   kdmesh::cli::add_delaunay_command(app, run);
+  kdmesh::cli::add_mesh_command(app, run);
+  kdmesh::cli::add_batch_command(app, run);
   kdmesh::cli::add_bench_command(app, run);
   try {
     app.parse(argc, argv);

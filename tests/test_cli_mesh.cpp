@@ -1,0 +1,345 @@
+// kdmesh mesh and kdmesh batch end to end: outputs and summaries, failure isolation between
+// batch jobs, seeded determinism under concurrency, and that failed jobs write nothing.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <vector>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "core/surface_mesh.h"
+#include "io/surface_io.h"
+#include "tests/support/run_cli.h"
+#include "tools/lib/mesh_job.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+using kdmesh::test::CliResult;
+using kdmesh::test::slurp;
+
+fs::path tmpdir() { return kdmesh::test::process_tmpdir("cli_mesh"); }
+
+CliResult kdmesh(const std::string& args) { return kdmesh::test::run_kdmesh(args, tmpdir()); }
+
+/// The cube [0, e]^3 as 12 outward triangles (each face split along a diagonal).
+kdmesh::SurfaceMesh cube(double e) {
+  kdmesh::SurfaceMesh m;
+  for (int i = 0; i < 8; ++i) m.points.push_back(e * (i & 1), e * ((i >> 1) & 1), e * ((i >> 2) & 1));
+  // Point i = (x, y, z) bits (1, 2, 4). Faces as quads a b c d, counter-clockwise from outside.
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads)
+    for (const std::uint32_t t : {q[0], q[1], q[2], q[0], q[2], q[3]}) m.tris.push_back(t);
+  return m;
+}
+
+fs::path write_cube(const std::string& name, double e, bool open = false) {
+  kdmesh::SurfaceMesh m = cube(e);
+  if (open) m.tris.resize(m.tris.size() - 3);  // drop one facet: a hole
+  const fs::path p = tmpdir() / name;
+  kdmesh::write_stl(m, p.string());
+  return p;
+}
+
+bool has_temp_leftovers(const fs::path& dir) {
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.path().filename().string().find(".tmp-") != std::string::npos) return true;
+  return false;
+}
+
+std::size_t count_lines(const std::string& text) {
+  std::size_t n = 0;
+  std::istringstream s(text);
+  for (std::string line; std::getline(s, line);)
+    if (!line.empty() && line[0] != '#') ++n;
+  return n;
+}
+
+TEST(CliMesh, CubeWritesVtuSummaryAndNodes) {
+  const fs::path stl = write_cube("cube10.stl", 10);
+  const fs::path dir = tmpdir() / "mesh-ok";
+  fs::remove_all(dir);
+  const fs::path vtu = dir / "cube.vtu", json = dir / "cube.json", xyz = dir / "cube.xyz";
+  const CliResult r = kdmesh("mesh " + stl.string() + " --size 3 --seed 3 --json -q -o " + vtu.string() +
+                             " --summary " + json.string() + " --nodes " + xyz.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);  // stdout is exactly one JSON document
+  EXPECT_EQ(j, nlohmann::json::parse(slurp(json)));  // the summary file is the same document
+  EXPECT_EQ(j["status"], "ok");
+  for (const char* k : {"counts", "seconds", "quality", "size_fidelity", "mesh_check", "notices", "outputs"})
+    EXPECT_TRUE(j.contains(k)) << k;
+  for (const char* k : {"read", "prepare", "features", "sizing", "place", "mesh", "mesh_check", "quality",
+                        "write", "total"})
+    EXPECT_TRUE(j["seconds"].contains(k)) << k;
+  const auto& c = j["counts"];
+  EXPECT_EQ(c["surface_points"], 8);
+  EXPECT_EQ(c["surface_facets"], 12);
+  EXPECT_EQ(c["bodies"], 1);
+  EXPECT_EQ(c["feature_edges"], 12);  // every cube edge turns by 90 >= 30 degrees
+  EXPECT_EQ(c["feature_corners"], 8);
+  const auto& k = c["nodes_by_kind"];
+  EXPECT_EQ(k["corner"], 8);
+  const std::uint64_t nb = k["corner"].get<std::uint64_t>() + k["edge"].get<std::uint64_t>() +
+                           k["surface"].get<std::uint64_t>();
+  EXPECT_EQ(nb + k["interior"].get<std::uint64_t>(), c["nodes"].get<std::uint64_t>());
+  // The boundary is a closed genus-0 triangulation of the nb boundary nodes: Euler's
+  // V - E + F = 2 with 3F = 2E gives F = 2V - 4.
+  EXPECT_EQ(c["boundary_faces"].get<std::uint64_t>(), 2 * nb - 4);
+  EXPECT_GT(c["tets"].get<std::uint64_t>(), 0u);
+  EXPECT_TRUE(j["mesh_check"]["pass"].get<bool>());
+  EXPECT_NEAR(j["mesh_check"]["mesh_volume"].get<double>(), 1000.0, 1e-9 * 1000);  // 10^3
+  EXPECT_GT(j["quality"]["min_dihedral"].get<double>(), 0.0);
+  EXPECT_GT(j["size_fidelity"]["edges"].get<std::uint64_t>(), c["tets"].get<std::uint64_t>());
+  EXPECT_GT(j["size_fidelity"]["mean_ratio"].get<double>(), 0.5);
+  EXPECT_LT(j["size_fidelity"]["mean_ratio"].get<double>(), 2.0);
+  // Outputs: the nodes file has one line per node; the VTU carries the mesh's data arrays.
+  EXPECT_EQ(count_lines(slurp(xyz)), c["nodes"].get<std::uint64_t>());
+  const std::string xml = slurp(vtu);
+  EXPECT_NE(xml.find("UnstructuredGrid"), std::string::npos);
+  EXPECT_NE(xml.find("node_kind"), std::string::npos);
+  EXPECT_FALSE(has_temp_leftovers(dir));
+}
+
+TEST(CliMesh, DelaunayChecksOfTheNodes) {
+  const fs::path stl = write_cube("cube4.stl", 4);
+  const CliResult r = kdmesh("mesh " + stl.string() + " --size 1.5 --check tetgen,delaunay --json -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_TRUE(j.contains("delaunay_check"));
+  EXPECT_TRUE(j["delaunay_check"]["pass"].get<bool>());
+  EXPECT_TRUE(j["delaunay_check"]["validity"]["pass"].get<bool>());
+  EXPECT_TRUE(j["delaunay_check"].contains("tetgen"));
+  EXPECT_TRUE(j["delaunay_check"].contains("cgal"));
+  // The Delaunay tetrahedralization of the nodes fills their convex hull, the cube: volume 4^3.
+  EXPECT_NEAR(j["delaunay_check"]["validity"]["volume"].get<double>(), 64.0, 1e-9 * 64);
+}
+
+TEST(CliMesh, RefineEdgesAddsNodesAlongFeatures) {
+  const fs::path stl = write_cube("cube6.stl", 6);
+  const CliResult plain = kdmesh("mesh " + stl.string() + " --size 2 --json -q");
+  const CliResult fine = kdmesh("mesh " + stl.string() + " --size 2 --refine-edges 30 --edge-size 0.5 --json -q");
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  ASSERT_EQ(fine.code, 0) << fine.err;
+  const auto a = nlohmann::json::parse(plain.out), b = nlohmann::json::parse(fine.out);
+  EXPECT_EQ(b["options"]["zones"], 1);
+  // 12 edges of length 6 at spacing ~0.5 instead of ~2: several times more edge nodes.
+  EXPECT_GT(b["counts"]["nodes_by_kind"]["edge"].get<double>(),
+            2 * a["counts"]["nodes_by_kind"]["edge"].get<double>());
+}
+
+TEST(CliMesh, ErrorsHaveTheirExitCodesAndWriteNothing) {
+  const fs::path dir = tmpdir() / "mesh-errors";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path vtu = dir / "x.vtu", json = dir / "x.json";
+  const std::string outs = " -o " + vtu.string() + " --summary " + json.string();
+  // Missing input: exit 3, the message names the file.
+  CliResult r = kdmesh("mesh " + (dir / "none.stl").string() + " --size 1 -q" + outs);
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("none.stl"), std::string::npos) << r.err;
+  // An open surface bounds no solid: exit 4.
+  const fs::path open = write_cube("open.stl", 1, true);
+  r = kdmesh("mesh " + open.string() + " --size 0.5 -q --json" + outs);
+  EXPECT_EQ(r.code, 4) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["status"], "failed");
+  EXPECT_EQ(j["error"]["exit_code"], 4);
+  // Bad options: exit 2.
+  const fs::path ok = write_cube("ok.stl", 1);
+  EXPECT_EQ(kdmesh("mesh " + ok.string() + " --size 0 -q" + outs).code, 2);
+  EXPECT_EQ(kdmesh("mesh " + ok.string() + " --size 1 --min-size 2 -q" + outs).code, 2);
+  EXPECT_EQ(kdmesh("mesh " + ok.string() + " --size 1 --check nothing -q" + outs).code, 2);
+  EXPECT_FALSE(fs::exists(vtu));
+  EXPECT_FALSE(fs::exists(json));
+  EXPECT_FALSE(has_temp_leftovers(dir));
+}
+
+TEST(CliMesh, OutputsAreAllOrNothing) {
+  const fs::path stl = write_cube("cube2.stl", 2);
+  const fs::path dir = tmpdir() / "mesh-outputs";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "plainfile") << "not a directory\n";
+  // The VTU and the summary can be written, the nodes cannot (their directory would have to be
+  // a regular file): the job fails with exit 6 and leaves neither the VTU nor the summary.
+  const CliResult r = kdmesh("mesh " + stl.string() + " --size 1 -q -o " + (dir / "m.vtu").string() +
+                             " --summary " + (dir / "m.json").string() + " --nodes " +
+                             (dir / "plainfile" / "m.xyz").string());
+  EXPECT_EQ(r.code, 6) << r.err;
+  EXPECT_NE(r.err.find("plainfile"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "m.vtu"));
+  EXPECT_FALSE(fs::exists(dir / "m.json"));
+  EXPECT_FALSE(has_temp_leftovers(dir));
+}
+
+TEST(CliMesh, HelpListsTheOptions) {
+  const CliResult m = kdmesh("mesh --help");
+  EXPECT_EQ(m.code, 0);
+  for (const char* opt : {"--size", "--refine-edges", "--edge-size", "--min-size", "--gradation", "--sharp-angle",
+                          "--scale", "--order", "--seed", "--check", "--summary", "--nodes", "--json"})
+    EXPECT_NE(m.out.find(opt), std::string::npos) << opt;
+  const CliResult b = kdmesh("batch --help");
+  EXPECT_EQ(b.code, 0);
+  for (const char* opt : {"--jobs", "--out-dir", "--only", "--json"}) EXPECT_NE(b.out.find(opt), std::string::npos) << opt;
+  EXPECT_EQ(kdmesh("batch x.yaml --jobs 0").code, 2);
+}
+
+// The library entry point behind both commands: never throws, reports progress in [0, 1].
+TEST(MeshJob, ReportsProgressAndReturnsErrorsInsteadOfThrowing) {
+  kdmesh::MeshJob job;
+  job.name = "lib";
+  job.input = write_cube("lib-cube.stl", 3).string();
+  job.sizing.max_size = 1;
+  std::map<std::string, std::pair<double, double>> seen;  // stage -> (min, max) fraction
+  std::vector<std::string> logs;
+  kdmesh::MeshJobCallbacks cb;
+  cb.log = [&](const std::string& s) { logs.push_back(s); };
+  cb.progress = [&](const std::string& stage, double f) {
+    auto [it, fresh] = seen.try_emplace(stage, f, f);
+    it->second.first = std::min(it->second.first, f);
+    it->second.second = std::max(it->second.second, f);
+  };
+  const kdmesh::MeshJobResult ok = kdmesh::run_mesh_job(job, cb);
+  ASSERT_TRUE(ok.ok()) << ok.summary.dump(2);
+  EXPECT_FALSE(seen.empty());
+  for (const auto& [stage, range] : seen) {
+    EXPECT_GE(range.first, 0.0) << stage;
+    EXPECT_LE(range.second, 1.0) << stage;
+  }
+  EXPECT_FALSE(logs.empty());
+  EXPECT_FALSE(ok.summary.contains("error"));
+
+  job.input = (tmpdir() / "missing.stl").string();
+  kdmesh::MeshJobResult bad;
+  EXPECT_NO_THROW(bad = kdmesh::run_mesh_job(job));
+  EXPECT_EQ(bad.code, kdmesh::ExitCode::input);
+  EXPECT_EQ(bad.summary["status"], "failed");
+  EXPECT_EQ(bad.summary["error"]["type"], "input");
+  EXPECT_NE(bad.summary["error"]["message"].get<std::string>().find("missing.stl"), std::string::npos);
+
+  job.input = write_cube("lib-cube2.stl", 3).string();
+  job.sizing.max_size = -1;  // a bad option is a usage error, not a crash
+  EXPECT_EQ(kdmesh::run_mesh_job(job).code, kdmesh::ExitCode::usage);
+}
+
+/// A batch of three jobs; `broken` is an STL that exists but is malformed.
+fs::path write_three_job_batch() {
+  write_cube("b-cube10.stl", 10);
+  write_cube("b-cube4.stl", 4);
+  std::ofstream(tmpdir() / "broken.stl") << "solid broken\n facet normal 0 0 1\n  outer loop\n   vertex 0 0\n";
+  const fs::path yaml = tmpdir() / "three.yaml";
+  std::ofstream(yaml) << R"(# three jobs, the middle one broken
+defaults:
+  order: kd-bfs
+  seed: 11
+jobs:
+  - name: big
+    input: b-cube10.stl
+    size: 3
+    output: {vtu: big.vtu, summary: big.json, nodes: big.xyz}
+  - name: broken
+    input: broken.stl
+    size: 1
+    output: {vtu: broken.vtu, summary: broken.json, nodes: broken.xyz}
+  - name: small
+    input: b-cube4.stl
+    size: 1
+    order: hilbert
+    zones:
+      - {type: point, size: 0.4, at: [0, 0, 0]}
+    output: {vtu: small.vtu, summary: small.json, nodes: small.xyz}
+)";
+  return yaml;
+}
+
+TEST(CliBatch, FailedJobIsIsolatedAndConcurrencyIsDeterministic) {
+  const fs::path yaml = write_three_job_batch();
+  nlohmann::json runs[2];
+  fs::path dirs[2];
+  for (int t = 0; t < 2; ++t) {
+    dirs[t] = tmpdir() / ("batch-j" + std::to_string(t + 1));
+    fs::remove_all(dirs[t]);
+    const CliResult r = kdmesh("batch " + yaml.string() + " --jobs " + std::to_string(t + 1) +
+                               " --out-dir " + dirs[t].string() + " --json");
+    // The broken job fails with an input error (3); the only failure, so the batch's code is 3.
+    EXPECT_EQ(r.code, 3) << r.err;
+    runs[t] = nlohmann::json::parse(r.out);
+    EXPECT_NE(r.err.find("[broken]"), std::string::npos) << r.err;  // progress lines carry the name
+    EXPECT_NE(r.err.find("broken.stl"), std::string::npos) << r.err;
+    const auto& jobs = runs[t]["jobs"];
+    ASSERT_EQ(jobs.size(), 3u);
+    EXPECT_EQ(jobs[0]["job"], "big");
+    EXPECT_EQ(jobs[0]["status"], "ok");
+    EXPECT_EQ(jobs[1]["job"], "broken");
+    EXPECT_EQ(jobs[1]["status"], "failed");
+    EXPECT_EQ(jobs[1]["error"]["type"], "input");
+    EXPECT_EQ(jobs[1]["error"]["exit_code"], 3);
+    EXPECT_EQ(jobs[2]["status"], "ok");
+    EXPECT_EQ(runs[t]["succeeded"], 2);
+    EXPECT_EQ(runs[t]["failed"], 1);
+    for (const char* f : {"big.vtu", "big.json", "big.xyz", "small.vtu", "small.json", "small.xyz"})
+      EXPECT_TRUE(fs::exists(dirs[t] / f)) << f;
+    for (const char* f : {"broken.vtu", "broken.json", "broken.xyz"}) EXPECT_FALSE(fs::exists(dirs[t] / f)) << f;
+    EXPECT_FALSE(has_temp_leftovers(dirs[t]));
+  }
+  // Seeded determinism: --jobs 2 gives what --jobs 1 gives, down to the node coordinates.
+  for (int i : {0, 2}) {
+    EXPECT_EQ(runs[0]["jobs"][i]["counts"], runs[1]["jobs"][i]["counts"]) << i;
+    EXPECT_EQ(runs[0]["jobs"][i]["quality"]["min_dihedral"], runs[1]["jobs"][i]["quality"]["min_dihedral"]);
+  }
+  EXPECT_EQ(slurp(dirs[0] / "big.xyz"), slurp(dirs[1] / "big.xyz"));
+  EXPECT_EQ(slurp(dirs[0] / "small.xyz"), slurp(dirs[1] / "small.xyz"));
+}
+
+TEST(CliBatch, HumanTableNamesTheFailedJob) {
+  const fs::path yaml = write_three_job_batch();
+  const fs::path dir = tmpdir() / "batch-human";
+  fs::remove_all(dir);
+  const CliResult r = kdmesh("batch " + yaml.string() + " --out-dir " + dir.string() + " -q --only broken,small");
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.out.find("min dihedral"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("FAILED (input)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("job 'broken' failed"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("big"), std::string::npos) << r.out;  // --only left it out
+  EXPECT_TRUE(fs::exists(dir / "small.vtu"));
+  EXPECT_FALSE(fs::exists(dir / "big.vtu"));
+  EXPECT_EQ(kdmesh("batch " + yaml.string() + " --only nosuch -q").code, 2);
+}
+
+TEST(CliBatch, ConfigErrorsStopBeforeAnyJobRuns) {
+  write_cube("cfg-cube.stl", 2);
+  const fs::path yaml = tmpdir() / "bad.yaml";
+  std::ofstream(yaml) << "jobs:\n  - name: a\n    input: cfg-cube.stl\n    size: 1\n    output: {vtu: a.vtu}\n"
+                         "  - name: b\n    input: cfg-cube.stl\n    sise: 1\n";
+  const fs::path dir = tmpdir() / "batch-cfg";
+  fs::remove_all(dir);
+  const CliResult r = kdmesh("batch " + yaml.string() + " --out-dir " + dir.string());
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find(yaml.string() + ":8:"), std::string::npos) << r.err;  // "sise:" is line 8
+  EXPECT_NE(r.err.find("did you mean 'size'"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "a.vtu"));  // job a never ran
+}
+
+TEST(CliBatch, AllSucceedingExitsZero) {
+  write_cube("ok-cube.stl", 3);
+  const fs::path yaml = tmpdir() / "ok.yaml";
+  // Both jobs run TetGen at the same time (-j 2): TetGen's global state must not be shared.
+  std::ofstream(yaml) << "jobs:\n  - {name: one, input: ok-cube.stl, size: 0.5, check: [tetgen]}\n"
+                         "  - {name: two, input: ok-cube.stl, size: 0.6, check: [delaunay, tetgen]}\n";
+  const CliResult r = kdmesh("batch " + yaml.string() + " -j 2 --json -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["succeeded"], 2);
+  for (int i : {0, 1}) {
+    EXPECT_TRUE(j["jobs"][i]["delaunay_check"]["pass"].get<bool>()) << i;
+    EXPECT_TRUE(j["jobs"][i]["delaunay_check"]["tetgen"]["pass"].get<bool>()) << i;
+  }
+}
+
+}  // namespace

@@ -1,0 +1,195 @@
+// kdmesh batch — run the meshing jobs of a YAML batch file, concurrently, each one isolated.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/error.h"
+#include "core/timer.h"
+#include "tools/kdmesh/cli.h"
+#include "tools/lib/job_config.h"
+#include "tools/lib/mesh_job.h"
+
+namespace kdmesh::cli {
+
+namespace {
+
+struct Options {
+  std::string file;
+  unsigned jobs = 1;
+  std::string out_dir;
+  std::vector<std::string> only;
+  Output out;
+};
+
+/// The jobs --only selects, in file order. Unknown names are a usage error.
+std::vector<MeshJob> select_jobs(BatchConfig config, const std::vector<std::string>& only) {
+  if (only.empty()) return std::move(config.jobs);
+  std::vector<std::string> names;
+  for (const MeshJob& j : config.jobs) names.push_back(j.name);
+  for (const std::string& n : only)
+    if (std::find(names.begin(), names.end(), n) == names.end()) {
+      const std::string near = closest_match(n, names);
+      std::string all;
+      for (const std::string& x : names) all += (all.empty() ? "" : ", ") + x;
+      throw UsageError("--only " + n + ": no such job in " + config.file +
+                       (near.empty() ? "" : " (did you mean '" + near + "'?)") + "; jobs: " + all);
+    }
+  std::vector<MeshJob> out;
+  for (MeshJob& j : config.jobs)
+    if (std::find(only.begin(), only.end(), j.name) != only.end()) out.push_back(std::move(j));
+  return out;
+}
+
+std::string fixed(double x, int digits) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << x;
+  return s.str();
+}
+
+/// The summary table: job, status, nodes, tets, min dihedral, mean edge/target, time.
+void print_table(std::ostream& os, const std::vector<MeshJobResult>& results) {
+  std::size_t w = 3;
+  for (const MeshJobResult& r : results) w = std::max(w, r.summary.value("job", std::string()).size());
+  os << std::left << std::setw(int(w) + 2) << "job" << std::setw(16) << "status" << std::right
+     << std::setw(10) << "nodes" << std::setw(11) << "tets" << std::setw(14) << "min dihedral"
+     << std::setw(18) << "mean edge/target" << std::setw(10) << "time (s)" << "\n";
+  for (const MeshJobResult& r : results) {
+    const nlohmann::json& j = r.summary;
+    const std::string status =
+        r.ok() ? "ok" : "FAILED (" + j["error"].value("type", std::string("internal")) + ")";
+    auto count = [&](const char* k) {
+      return j.contains("counts") && j["counts"].contains(k) ? std::to_string(j["counts"][k].get<std::uint64_t>())
+                                                              : std::string("-");
+    };
+    const bool q = r.ok() && j.contains("quality");
+    os << std::left << std::setw(int(w) + 2) << j.value("job", std::string()) << std::setw(16) << status
+       << std::right << std::setw(10) << count("nodes") << std::setw(11) << count("tets")
+       << std::setw(14) << (q ? fixed(j["quality"]["min_dihedral"].get<double>(), 2) : "-")
+       << std::setw(18) << (q ? fixed(j["size_fidelity"]["mean_ratio"].get<double>(), 3) : "-")
+       << std::setw(10) << fixed(j["seconds"].value("total", 0.0), 2) << "\n";
+  }
+}
+
+int run_batch(const Options& o) {
+  const Output& out = o.out;
+  Stopwatch total;
+  const BatchConfig config = load_batch_config(o.file, o.out_dir);  // InputError: exit 3
+  const std::vector<MeshJob> jobs = select_jobs(config, o.only);
+  const unsigned workers = std::max(1u, std::min<unsigned>(o.jobs, unsigned(jobs.size())));
+  out.stage(std::to_string(jobs.size()) + " job" + (jobs.size() == 1 ? "" : "s") + " from " +
+            o.file + ", " + std::to_string(workers) + " at a time");
+
+  std::mutex log_mutex;
+  const bool tty = !out.quiet && isatty(STDERR_FILENO);
+  auto log = [&](const std::string& name, const std::string& msg) {
+    if (out.quiet) return;
+    std::lock_guard<std::mutex> lock(log_mutex);
+    std::cerr << "kdmesh: [" << name << "] " << msg << std::endl;
+  };
+
+  std::vector<MeshJobResult> results(jobs.size());
+  std::atomic<std::size_t> next{0};
+  auto worker = [&] {
+    for (std::size_t i; (i = next.fetch_add(1)) < jobs.size();) {
+      const MeshJob& job = jobs[i];
+      // Whole progress lines, one per 10% step (on a terminal only: logs stay readable).
+      auto last = std::make_shared<std::map<std::string, int>>();
+      MeshJobCallbacks cb;
+      cb.log = [&, name = job.name](const std::string& s) { log(name, s); };
+      if (tty)
+        cb.progress = [&, last, name = job.name](const std::string& stage, double f) {
+          const int step = int(f * 10);
+          {  // stages may report from worker threads
+            std::lock_guard<std::mutex> lock(log_mutex);
+            int& prev = last->try_emplace(stage, -1).first->second;
+            if (step <= prev) return;
+            prev = step;
+          }
+          log(name, stage + " " + std::to_string(step * 10) + "%");
+        };
+      try {
+        results[i] = run_mesh_job(job, cb);  // never throws by contract; guarded all the same
+      } catch (...) {
+        results[i].code = ExitCode::failure;
+        results[i].summary = {{"job", job.name}, {"status", "failed"},
+                              {"error", {{"type", "internal"}, {"exit_code", 1},
+                                         {"message", "unexpected error escaped the job"}}}};
+      }
+      if (results[i].ok())
+        log(job.name, "done");
+      else
+        log(job.name, "FAILED: " + results[i].summary["error"].value("message", std::string()));
+    }
+  };
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < workers; ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+
+  // Exit code: 0 if all succeeded; the failed jobs' code if they all share one; else 1.
+  std::size_t failed = 0;
+  int code = 0;
+  for (const MeshJobResult& r : results) {
+    if (r.ok()) continue;
+    code = failed++ == 0 ? int(r.code) : (code == int(r.code) ? code : int(ExitCode::failure));
+  }
+
+  print_table(out.human(), results);
+  for (const MeshJobResult& r : results)
+    if (!r.ok())
+      out.human() << "job '" << r.summary.value("job", std::string()) << "' failed (exit "
+                  << int(r.code) << "): " << r.summary["error"].value("message", std::string()) << "\n";
+  out.human() << jobs.size() - failed << " of " << jobs.size() << " jobs succeeded in "
+              << fixed(total.seconds(), 2) << " s\n";
+  nlohmann::json j = {{"command", "batch"},
+                      {"file", o.file},
+                      {"workers", workers},
+                      {"succeeded", jobs.size() - failed},
+                      {"failed", failed},
+                      {"exit_code", code},
+                      {"seconds", total.seconds()},
+                      {"jobs", nlohmann::json::array()}};
+  for (const MeshJobResult& r : results) j["jobs"].push_back(r.summary);
+  out.emit_json(j);
+  if (code != 0)
+    std::cerr << "kdmesh: error: " << failed << " of " << jobs.size() << " jobs failed" << std::endl;
+  return code;
+}
+
+}  // namespace
+
+void add_batch_command(CLI::App& app, Runner& run) {
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("batch", "Run the meshing jobs of a YAML batch file");
+  cmd->add_option("file", o->file, "Batch file (.yaml)")->required();
+  cmd->add_option("-j,--jobs", o->jobs, "Jobs run at the same time")
+      ->check(CLI::Range(1u, 1024u))
+      ->capture_default_str();
+  cmd->add_option("--out-dir", o->out_dir,
+                  "Directory relative output paths are resolved against (default: current)");
+  cmd->add_option("--only", o->only, "Run only the named jobs (repeatable)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+      ->delimiter(',');
+  add_output_flags(cmd, o->out);
+  cmd->footer(
+      "Config errors (exit 3) name the file, line and key, and stop the batch before any job\n"
+      "runs. A job that fails is reported and the others continue. Exit code: 0 if every job\n"
+      "succeeded; otherwise the failed jobs' code when they all share one, else 1.\n"
+      "Schema: tools/lib/job_config.h.");
+  cmd->callback([o, &run] { run = [o] { return run_batch(*o); }; });
+}
+
+}  // namespace kdmesh::cli

@@ -1,0 +1,412 @@
+// kdmesh — batch files: YAML -> MeshJob list, every error naming file:line and key.
+// yaml-cpp stays in this file.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// GCC 12 at -O3 warns falsely (-Wrestrict, GCC bug 105329) inside libstdc++'s string
+// concatenation when it compiles InputError's constructor (`":" + std::to_string(line)`) out of
+// line in this file; the pragma must precede <string> to reach that location.
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ == 12
+#pragma GCC diagnostic ignored "-Wrestrict"
+#endif
+#include "tools/lib/job_config.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <utility>
+
+#include "core/error.h"
+
+namespace kdmesh {
+
+namespace fs = std::filesystem;
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diag = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+std::string closest_match(const std::string& word, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t best_d = std::size_t(-1);
+  for (const std::string& c : candidates) {
+    const std::size_t d = edit_distance(word, c);
+    if (d < best_d) best_d = d, best = c;
+  }
+  // "Reasonably close": at most half the longer word's letters differ (and at least 1 allowed).
+  const std::size_t limit = std::max<std::size_t>(1, std::max(word.size(), best.size()) / 2);
+  return best_d <= limit ? best : std::string();
+}
+
+namespace {
+
+const std::vector<std::string> kTopKeys = {"defaults", "jobs"};
+const std::vector<std::string> kJobKeys = {"name",        "input", "scale", "size",  "min_size",
+                                           "gradation",   "sharp_angle",    "zones", "order",
+                                           "seed",        "check", "output"};
+const std::vector<std::string> kZoneTypes = {"sharp_edges", "polyline", "segment", "plane",
+                                             "point",       "box",      "ball"};
+const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes"};
+const std::vector<std::string> kChecks = {"tetgen", "delaunay"};
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+/// The keys a zone of `type` takes besides type, size and name.
+std::vector<std::string> zone_keys(const std::string& type) {
+  if (type == "sharp_edges") return {"angle"};
+  if (type == "polyline") return {"points"};
+  if (type == "segment") return {"from", "to"};
+  if (type == "plane") return {"origin", "normal"};
+  if (type == "point") return {"at"};
+  if (type == "box") return {"min", "max"};
+  return {"center", "radius"};  // ball
+}
+
+/// The one place that builds an InputError.
+[[noreturn]] void throw_input(const std::string& file, std::uint64_t line, const std::string& msg) {
+  throw InputError(file, line, msg);
+}
+
+std::uint64_t line_of(const YAML::Node& n) {
+  const int l = n.Mark().line;
+  return l >= 0 ? std::uint64_t(l) + 1 : 0;
+}
+
+std::string describe(const YAML::Node& n) {
+  if (!n.IsDefined() || n.IsNull()) return "nothing";
+  if (n.IsMap()) return "a mapping";
+  if (n.IsSequence()) return "a list";
+  return "'" + n.Scalar() + "'";
+}
+
+/// One mapping entry: its key node (for the line) and value.
+struct Entry {
+  YAML::Node key, value;
+};
+
+class Loader {
+ public:
+  Loader(std::string file, fs::path base_dir, fs::path out_dir)
+      : file_(std::move(file)), base_(std::move(base_dir)), out_(std::move(out_dir)) {}
+
+  [[noreturn]] void fail(const YAML::Node& at, const std::string& msg) const {
+    throw_input(file_, line_of(at), msg);
+  }
+
+  /// The entries of a mapping, refusing duplicate and unknown keys (with a suggestion).
+  std::map<std::string, Entry> entries(const YAML::Node& map, const std::vector<std::string>& valid,
+                                       const std::string& where) const {
+    if (!map.IsMap()) fail(map, where + ": expected a mapping, got " + describe(map));
+    std::map<std::string, Entry> out;
+    for (const auto& kv : map) {
+      if (!kv.first.IsScalar()) fail(kv.first, where + ": keys must be plain names");
+      const std::string key = kv.first.Scalar();
+      if (std::find(valid.begin(), valid.end(), key) == valid.end()) {
+        const std::string near = closest_match(key, valid);
+        fail(kv.first, where + ": unknown key '" + key + "'" +
+                           (near.empty() ? "" : " (did you mean '" + near + "'?)") +
+                           "; valid keys: " + join(valid));
+      }
+      if (out.count(key)) fail(kv.first, where + ": duplicate key '" + key + "'");
+      out[key] = {kv.first, kv.second};
+    }
+    return out;
+  }
+
+  double number(const YAML::Node& v, const std::string& what) const {
+    double d = 0;
+    if (!v.IsScalar() || v.Tag() == "!" || !YAML::convert<double>::decode(v, d))
+      fail(v, what + ": expected a number, got " + describe(v));
+    if (!std::isfinite(d)) fail(v, what + ": expected a finite number, got " + describe(v));
+    return d;
+  }
+
+  double positive(const YAML::Node& v, const std::string& what) const {
+    const double d = number(v, what);
+    if (!(d > 0)) fail(v, what + ": must be > 0, got " + v.Scalar());
+    return d;
+  }
+
+  std::uint64_t unsigned_integer(const YAML::Node& v, const std::string& what) const {
+    const std::string s = v.IsScalar() && v.Tag() != "!" ? v.Scalar() : std::string();
+    std::uint64_t x = 0;
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), x);
+    if (s.empty() || s[0] == '-' || s[0] == '+' || ec != std::errc() || end != s.data() + s.size())
+      fail(v, what + ": expected an unsigned integer, got " + describe(v));
+    return x;
+  }
+
+  std::string string(const YAML::Node& v, const std::string& what) const {
+    if (!v.IsScalar() || v.Scalar().empty())
+      fail(v, what + ": expected a non-empty string, got " + describe(v));
+    return v.Scalar();
+  }
+
+  void vec3(const YAML::Node& v, const std::string& what, std::vector<double>& out) const {
+    if (!v.IsSequence() || v.size() != 3)
+      fail(v, what + ": expected a point [x, y, z], got " + describe(v));
+    for (std::size_t i = 0; i < 3; ++i) out.push_back(number(v[i], what + "[" + std::to_string(i) + "]"));
+  }
+
+  SizingZone zone(const YAML::Node& z, const std::string& where) const {
+    if (!z.IsMap()) fail(z, where + ": expected a mapping {type: ..., size: ...}, got " + describe(z));
+    const YAML::Node type_node = z["type"];
+    if (!type_node) fail(z, where + ": missing required key 'type' (one of " + join(kZoneTypes) + ")");
+    const std::string type = type_node.IsScalar() ? type_node.Scalar() : std::string();
+    if (std::find(kZoneTypes.begin(), kZoneTypes.end(), type) == kZoneTypes.end()) {
+      const std::string near = closest_match(type, kZoneTypes);
+      fail(type_node, where + ": key 'type': unknown zone type " + describe(type_node) +
+                          (near.empty() ? "" : " (did you mean '" + near + "'?)") + "; valid types: " +
+                          join(kZoneTypes));
+    }
+    const std::string at = where + " (" + type + ")";
+    std::vector<std::string> keys = {"type", "size", "name"};
+    for (const std::string& k : zone_keys(type)) keys.push_back(k);
+    const auto e = entries(z, keys, at);
+    SizingZone out;
+    out.kind = SizingZone::Kind(std::find(kZoneTypes.begin(), kZoneTypes.end(), type) - kZoneTypes.begin());
+    if (!e.count("size")) fail(z, at + ": missing required key 'size'");
+    out.size = positive(e.at("size").value, at + ": key 'size'");
+    if (e.count("name")) out.name = string(e.at("name").value, at + ": key 'name'");
+    for (const std::string& k : zone_keys(type))
+      if (!e.count(k) && k != "angle") fail(z, at + ": missing required key '" + k + "'");
+    auto key = [&](const std::string& k) { return at + ": key '" + k + "'"; };
+    switch (out.kind) {
+      case SizingZone::Kind::sharp_edges:
+        if (e.count("angle")) {
+          out.angle_deg = number(e.at("angle").value, key("angle"));
+          if (!(out.angle_deg > 0 && out.angle_deg < 180))
+            fail(e.at("angle").value, key("angle") + ": must be in (0, 180) degrees");
+        }
+        break;
+      case SizingZone::Kind::polyline: {
+        const YAML::Node p = e.at("points").value;
+        if (!p.IsSequence() || p.size() < 2)
+          fail(p, key("points") + ": expected a list of at least 2 points [x, y, z], got " + describe(p));
+        for (std::size_t i = 0; i < p.size(); ++i) {
+          vec3(p[i], key("points") + "[" + std::to_string(i) + "]", out.coords);
+          if (i > 0 && std::equal(out.coords.end() - 3, out.coords.end(), out.coords.end() - 6))
+            fail(p[i], key("points") + "[" + std::to_string(i) + "]: repeats the previous point");
+        }
+        break;
+      }
+      case SizingZone::Kind::segment:
+        vec3(e.at("from").value, key("from"), out.coords);
+        vec3(e.at("to").value, key("to"), out.coords);
+        if (std::equal(out.coords.begin(), out.coords.begin() + 3, out.coords.begin() + 3))
+          fail(e.at("to").value, key("to") + ": equals 'from' (a segment needs two distinct ends)");
+        break;
+      case SizingZone::Kind::plane:
+        vec3(e.at("origin").value, key("origin"), out.coords);
+        vec3(e.at("normal").value, key("normal"), out.coords);
+        if (out.coords[3] == 0 && out.coords[4] == 0 && out.coords[5] == 0)
+          fail(e.at("normal").value, key("normal") + ": must not be the zero vector");
+        break;
+      case SizingZone::Kind::point:
+        vec3(e.at("at").value, key("at"), out.coords);
+        break;
+      case SizingZone::Kind::box:
+        vec3(e.at("min").value, key("min"), out.coords);
+        vec3(e.at("max").value, key("max"), out.coords);
+        for (int i = 0; i < 3; ++i)
+          if (out.coords[i] > out.coords[3 + i])
+            fail(e.at("max").value, key("max") + ": is below 'min' in coordinate " + "xyz"[i]);
+        break;
+      case SizingZone::Kind::ball:
+        vec3(e.at("center").value, key("center"), out.coords);
+        out.coords.push_back(positive(e.at("radius").value, key("radius")));
+        break;
+    }
+    return out;
+  }
+
+  std::string resolve_output(const YAML::Node& v, const std::string& what) const {
+    const fs::path p = string(v, what);
+    return (p.is_absolute() || out_.empty() ? p : out_ / p).lexically_normal().string();
+  }
+
+  MeshJob job(const YAML::Node& node, const std::map<std::string, Entry>& defaults,
+              std::size_t index) const {
+    const std::string where0 = "jobs[" + std::to_string(index) + "]";
+    std::map<std::string, Entry> e = entries(node, kJobKeys, where0);
+    for (const auto& [k, d] : defaults) e.emplace(k, d);  // job keys win
+    MeshJob job;
+    job.origin = file_ + ":" + std::to_string(line_of(node));
+    if (!e.count("name")) fail(node, where0 + ": missing required key 'name'");
+    job.name = string(e.at("name").value, where0 + ": key 'name'");
+    if (!std::all_of(job.name.begin(), job.name.end(), [](char c) {
+          return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-';
+        }))
+      fail(e.at("name").value, where0 + ": key 'name': '" + job.name +
+                                   "' may only contain letters, digits, '_', '.' and '-'");
+    const std::string where = "job '" + job.name + "'";
+    auto key = [&](const std::string& k) { return where + ": key '" + k + "'"; };
+    for (const char* req : {"input", "size"})
+      if (!e.count(req)) fail(node, where + ": missing required key '" + std::string(req) + "'");
+
+    {  // input: relative to the batch file's directory; must exist, STL or PLY
+      const YAML::Node v = e.at("input").value;
+      const fs::path given = string(v, key("input"));
+      const fs::path p = (given.is_absolute() ? given : base_ / given).lexically_normal();
+      std::string ext = p.extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+      if (ext != ".stl" && ext != ".ply")
+        fail(v, key("input") + ": '" + given.string() + "' is not an .stl or .ply file");
+      std::error_code ec;
+      if (!fs::is_regular_file(p, ec))
+        fail(v, key("input") + ": file '" + p.string() + "' not found" +
+                    (given.is_absolute() ? "" : " (relative paths are resolved against the batch file's directory)"));
+      job.input = p.string();
+    }
+    if (e.count("scale")) job.scale = positive(e.at("scale").value, key("scale"));
+    job.sizing.max_size = positive(e.at("size").value, key("size"));
+    job.sizing.min_size = job.sizing.max_size / 1000;
+    if (e.count("min_size")) {
+      job.sizing.min_size = positive(e.at("min_size").value, key("min_size"));
+      if (job.sizing.min_size > job.sizing.max_size)
+        fail(e.at("min_size").value, key("min_size") + ": must not exceed 'size'");
+    }
+    if (e.count("gradation")) job.sizing.gradation = positive(e.at("gradation").value, key("gradation"));
+    if (e.count("sharp_angle")) {
+      const YAML::Node v = e.at("sharp_angle").value;
+      job.sharp_angle = number(v, key("sharp_angle"));
+      if (!(job.sharp_angle >= 0 && job.sharp_angle < 180))
+        fail(v, key("sharp_angle") + ": must be in [0, 180) degrees, got " + v.Scalar());
+    }
+    if (e.count("zones")) {
+      const YAML::Node z = e.at("zones").value;
+      if (!z.IsSequence()) fail(z, key("zones") + ": expected a list, got " + describe(z));
+      for (std::size_t i = 0; i < z.size(); ++i)
+        job.sizing.zones.push_back(zone(z[i], where + ": zones[" + std::to_string(i) + "]"));
+    }
+    if (e.count("order")) {
+      const YAML::Node v = e.at("order").value;
+      const std::string name = string(v, key("order"));
+      try {
+        job.order.kind = parse_order_kind(name);
+      } catch (const UsageError&) {
+        const std::string near = closest_match(name, order_kind_names());
+        fail(v, key("order") + ": unknown order '" + name + "'" +
+                    (near.empty() ? "" : " (did you mean '" + near + "'?)") +
+                    "; valid orders: " + join(order_kind_names()));
+      }
+    }
+    if (e.count("seed")) job.seed = unsigned_integer(e.at("seed").value, key("seed"));
+    job.order.seed = job.seed;
+    if (e.count("check")) {
+      const YAML::Node c = e.at("check").value;
+      if (!c.IsSequence()) fail(c, key("check") + ": expected a list of " + join(kChecks) + ", got " + describe(c));
+      for (std::size_t i = 0; i < c.size(); ++i) {
+        const std::string name = c[i].IsScalar() ? c[i].Scalar() : std::string();
+        if (name == "tetgen") job.check_tetgen = true;
+        else if (name == "delaunay") job.check_delaunay = true;
+        else {
+          const std::string near = closest_match(name, kChecks);
+          fail(c[i], key("check") + ": unknown check " + describe(c[i]) +
+                         (near.empty() ? "" : " (did you mean '" + near + "'?)") + "; valid checks: " + join(kChecks));
+        }
+      }
+    }
+    if (e.count("output")) {
+      const auto o = entries(e.at("output").value, kOutputKeys, key("output"));
+      const std::string k = key("output");
+      if (o.count("vtu")) job.vtu = resolve_output(o.at("vtu").value, k + ": key 'vtu'");
+      if (o.count("summary")) job.summary = resolve_output(o.at("summary").value, k + ": key 'summary'");
+      if (o.count("nodes")) job.nodes = resolve_output(o.at("nodes").value, k + ": key 'nodes'");
+    }
+    return job;
+  }
+
+  BatchConfig load(const YAML::Node& root) const {
+    if (!root.IsDefined() || root.IsNull())
+      throw_input(file_, 0, "empty batch file: expected a mapping with a 'jobs' list");
+    const auto top = entries(root, kTopKeys, "batch file");
+    std::map<std::string, Entry> defaults;
+    if (top.count("defaults")) defaults = entries(top.at("defaults").value, kJobKeys, "defaults");
+    if (!top.count("jobs")) fail(root, "batch file: missing required key 'jobs'");
+    const YAML::Node jobs = top.at("jobs").value;
+    if (!jobs.IsSequence() || jobs.size() == 0)
+      fail(jobs.IsNull() ? top.at("jobs").key : jobs,
+           "key 'jobs': expected a non-empty list of jobs, got " + describe(jobs));
+    BatchConfig config;
+    config.file = file_;
+    std::map<std::string, std::pair<std::string, std::string>> writers;  // output path -> job, key
+    for (std::size_t i = 0; i < jobs.size(); ++i) {
+      MeshJob j = job(jobs[i], defaults, i);
+      for (const MeshJob& other : config.jobs)
+        if (other.name == j.name)
+          fail(jobs[i]["name"] ? jobs[i]["name"] : jobs[i],
+               "job '" + j.name + "': key 'name': duplicate job name (first defined at " + other.origin + ")");
+      for (const auto& [k, path] : {std::pair<const char*, const std::string*>{"vtu", &j.vtu},
+                                    {"summary", &j.summary},
+                                    {"nodes", &j.nodes}}) {
+        if (path->empty()) continue;
+        std::error_code ec;
+        fs::path canon_path = fs::weakly_canonical(*path, ec);
+        if (ec) canon_path = fs::absolute(*path, ec).lexically_normal();
+        const std::string canon = canon_path.string();
+        const auto it = writers.find(canon);
+        if (it != writers.end())
+          fail(jobs[i]["output"] ? jobs[i]["output"]
+               : defaults.count("output") ? defaults.at("output").value
+                                          : jobs[i],
+               "job '" + j.name + "': key 'output': '" + *path + "' (" + k + ") is also written by job '" +
+                   it->second.first + "' (" + it->second.second + ")");
+        writers[canon] = {j.name, k};
+      }
+      config.jobs.push_back(std::move(j));
+    }
+    return config;
+  }
+
+ private:
+  std::string file_;
+  fs::path base_, out_;
+};
+
+}  // namespace
+
+BatchConfig load_batch_config(const std::string& path, const std::string& out_dir) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw_input(path, 0, "cannot open batch file");
+  std::stringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw_input(path, 0, "cannot read batch file");
+  YAML::Node root;
+  try {
+    root = YAML::Load(text.str());
+  } catch (const YAML::Exception& e) {
+    throw_input(path, e.mark.line >= 0 ? std::uint64_t(e.mark.line) + 1 : 0,
+                     "YAML syntax error" +
+                         (e.mark.column >= 0 ? " at column " + std::to_string(e.mark.column + 1) : std::string()) +
+                         ": " + e.msg);
+  }
+  const fs::path base = fs::path(path).parent_path();
+  try {
+    return Loader(path, base, out_dir).load(root);
+  } catch (const YAML::Exception& e) {  // not expected: every access is checked first
+    throw_input(path, e.mark.line >= 0 ? std::uint64_t(e.mark.line) + 1 : 0, e.msg);
+  }
+}
+
+}  // namespace kdmesh

@@ -1,0 +1,55 @@
+// kdmesh — batch files: YAML -> a list of MeshJob (the schema of `kdmesh batch`).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <string>
+#include <vector>
+
+#include "tools/lib/mesh_job.h"
+
+namespace kdmesh {
+
+/// Batch file schema (pinned; README and models follow it):
+///
+///   defaults:      optional mapping; any job key; merged under every job (job keys win,
+///                  a value replaces the default's whole value, lists and mappings included)
+///   jobs:          required, non-empty list of mappings:
+///     name         required, unique, [A-Za-z0-9_.-]+
+///     input        required; .stl or .ply; relative to the YAML file's directory; must exist
+///     scale        optional number > 0 (default 1)
+///     size         required number > 0: h_max
+///     min_size     optional number > 0, <= size (default size / 1000)
+///     gradation    optional number > 0 (default 0.3)
+///     sharp_angle  optional degrees in [0, 180) (default 30; 0 = no feature edges)
+///     zones        optional list of mappings {type, size > 0, name?} plus, by type:
+///                    sharp_edges: angle (degrees, default 30)
+///                    polyline: points [[x,y,z], ...] (>= 2, consecutive ones distinct)
+///                    segment: from [x,y,z], to [x,y,z]   (distinct)
+///                    plane: origin [x,y,z], normal [x,y,z] (non-zero)
+///                    point: at [x,y,z]
+///                    box: min [x,y,z], max [x,y,z]       (min <= max)
+///                    ball: center [x,y,z], radius > 0
+///                  mapped to SizingZone with coords packed as sizing/sizing_field.h documents
+///     order        optional order name (mesher/order.h: kd-bfs, kd-bfs-alt, kd-local, hilbert,
+///                  brio, random, input; default kd-bfs)
+///     seed         optional unsigned integer (default 1)
+///     check        optional list of: tetgen, delaunay
+///     output       optional mapping {vtu, summary, nodes}: paths relative to out_dir
+///
+/// Every error is an InputError naming the file, the 1-based line and the key at fault:
+/// unknown keys (with the closest valid key), wrong types, missing required keys, bad values,
+/// duplicate keys or job names, missing inputs, two jobs writing one file, YAML syntax errors.
+struct BatchConfig {
+  std::string file;           ///< the YAML file as given
+  std::vector<MeshJob> jobs;  ///< in file order; MeshJob::origin is "file:line" of the job
+};
+
+/// Loads and validates a batch file. Relative output paths are resolved against `out_dir`
+/// ("" = the current directory); inputs against the YAML file's directory.
+BatchConfig load_batch_config(const std::string& path, const std::string& out_dir = "");
+
+/// Levenshtein distance, and the candidate closest to `word` (for "did you mean" hints; ""
+/// when none is reasonably close).
+std::size_t edit_distance(const std::string& a, const std::string& b);
+std::string closest_match(const std::string& word, const std::vector<std::string>& candidates);
+
+}  // namespace kdmesh

@@ -1,0 +1,396 @@
+// kdmesh — one meshing job: the whole pipeline, its summary, and all-or-nothing outputs.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "tools/lib/mesh_job.h"
+
+#include <array>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <memory>
+#include <new>
+#include <vector>
+
+#include "core/atomic_file.h"
+#include "core/timer.h"
+#include "io/points_io.h"
+#include "io/surface_io.h"
+#include "io/vtu_writer.h"
+#include "mesher/delaunay.h"
+#include "mesher/mesh_check.h"
+#include "mesher/node_placement.h"
+#include "mesher/quality.h"
+#include "mesher/size_fidelity.h"
+#include "mesher/surface_prepare.h"
+#include "mesher/surface_query.h"
+#include "mesher/tet_compare.h"
+#include "mesher/volume_mesh.h"
+#include "sizing/features.h"
+#include "tools/lib/delaunay_verify.h"
+
+namespace kdmesh {
+
+std::string format_job_report(const nlohmann::json& j) {
+  std::ostringstream s;
+  s << std::setprecision(4);
+  auto num = [&](const nlohmann::json& o, const char* k) -> double {
+    return o.contains(k) && o[k].is_number() ? o[k].get<double>() : 0.0;
+  };
+  auto cnt = [&](const nlohmann::json& o, const char* k) -> std::uint64_t {
+    return o.contains(k) && o[k].is_number() ? o[k].get<std::uint64_t>() : 0;
+  };
+  s << "job " << j.value("job", std::string()) << ": " << j.value("status", std::string()) << "\n";
+  if (j.contains("counts")) {
+    const nlohmann::json& c = j["counts"];
+    if (c.contains("surface_facets"))
+      s << "  surface       " << cnt(c, "surface_points") << " points, " << cnt(c, "surface_facets")
+        << " facets, " << cnt(c, "bodies") << (cnt(c, "bodies") == 1 ? " body, " : " bodies, ") << cnt(c, "feature_edges")
+        << " feature edges\n";
+    if (c.contains("nodes_by_kind")) {
+      const nlohmann::json& k = c["nodes_by_kind"];
+      s << "  nodes         " << cnt(c, "nodes") << " (corner " << cnt(k, "corner") << ", edge "
+        << cnt(k, "edge") << ", surface " << cnt(k, "surface") << ", interior "
+        << cnt(k, "interior") << "), Steiner " << cnt(c, "steiner_points") << ", dropped "
+        << cnt(c, "dropped_nodes") << "\n";
+      s << "  tets          " << cnt(c, "tets") << ", boundary faces " << cnt(c, "boundary_faces")
+        << "\n";
+    }
+  }
+  if (j.contains("quality")) {
+    const nlohmann::json& q = j["quality"];
+    s << "  quality       dihedral " << num(q, "min_dihedral") << " .. " << num(q, "max_dihedral")
+      << " deg, radius ratio mean " << num(q, "mean_radius_ratio") << ", min "
+      << num(q, "min_radius_ratio") << "\n";
+  }
+  if (j.contains("size_fidelity")) {
+    const nlohmann::json& f = j["size_fidelity"];
+    s << "  size          mean edge/target " << num(f, "mean_ratio") << ", "
+      << 100 * num(f, "fraction_in_range") << "% of " << cnt(f, "edges")
+      << " edges in [0.7, 1.4]\n";
+  }
+  if (j.contains("delaunay_check"))
+    s << "  delaunay      " << (j["delaunay_check"].value("pass", false) ? "ok" : "FAIL") << "\n";
+  if (j.contains("mesh_check")) {
+    const nlohmann::json& m = j["mesh_check"];
+    s << "  mesh check    " << (m.value("pass", false) ? "ok" : "FAIL") << " (volume error "
+      << num(m, "volume_error") << ", max Hausdorff " << num(m, "max_hausdorff") << " h)\n";
+  }
+  if (j.contains("seconds")) {
+    s << "  time          ";
+    bool first = true;
+    for (const char* k : {"read", "prepare", "features", "sizing", "place", "mesh",
+                          "delaunay_check", "mesh_check", "quality", "write", "total"})
+      if (j["seconds"].contains(k)) {
+        s << (first ? "" : ", ") << k << " " << std::fixed << std::setprecision(3)
+          << num(j["seconds"], k) << std::defaultfloat << std::setprecision(4);
+        first = false;
+      }
+    s << " s\n";
+  }
+  if (j.contains("outputs") && !j["outputs"].empty()) {
+    s << "  wrote        ";
+    for (const auto& [k, v] : j["outputs"].items()) s << " " << v.get<std::string>();
+    s << "\n";
+  }
+  if (j.contains("error"))
+    s << "  error         " << j["error"].value("type", std::string()) << " (exit "
+      << j["error"].value("exit_code", 1) << "): " << j["error"].value("message", std::string())
+      << "\n";
+  return s.str();
+}
+
+std::string error_type_name(ExitCode code) {
+  switch (code) {
+    case ExitCode::ok: return "none";
+    case ExitCode::usage: return "usage";
+    case ExitCode::input: return "input";
+    case ExitCode::geometry: return "geometry";
+    case ExitCode::check: return "check";
+    case ExitCode::output: return "output";
+    case ExitCode::failure: break;
+  }
+  return "internal";
+}
+
+namespace {
+
+nlohmann::json histogram_json(const Histogram& h) {
+  return {{"lo", h.lo}, {"hi", h.hi}, {"counts", h.counts}};
+}
+
+nlohmann::json quality_json(const QualitySummary& q) {
+  return {{"tets", q.tets},
+          {"inverted", q.inverted},
+          {"min_dihedral", q.min_dihedral},
+          {"max_dihedral", q.max_dihedral},
+          {"mean_radius_ratio", q.mean_radius_ratio},
+          {"min_radius_ratio", q.min_radius_ratio},
+          {"max_radius_edge", q.max_radius_edge},
+          {"mean_volume_length", q.mean_volume_length},
+          {"min_volume_length", q.min_volume_length},
+          {"min_dihedral_hist", histogram_json(q.min_dihedral_hist)},
+          {"radius_ratio_hist", histogram_json(q.radius_ratio_hist)}};
+}
+
+nlohmann::json mesh_check_json(const MeshCheck& c) {
+  return {{"pass", c.ok()},
+          {"tets", c.tets},
+          {"boundary_faces", c.boundary_faces},
+          {"nonpositive_tets", c.nonpositive_tets},
+          {"outside_tets", c.outside_tets},
+          {"offsurface_vertices", c.offsurface_vertices},
+          {"offsurface_faces", c.offsurface_faces},
+          {"max_hausdorff", c.max_hausdorff},
+          {"open_edges", c.open_edges},
+          {"nonmanifold_vertices", c.nonmanifold_vertices},
+          {"mesh_volume", c.mesh_volume},
+          {"solid_volume", c.solid_volume},
+          {"volume_error", c.volume_error},
+          {"failures", c.failures}};
+}
+
+nlohmann::json size_fidelity_json(const SizeFidelity& f) {
+  return {{"edges", f.edges},
+          {"mean_ratio", f.mean_ratio},
+          {"fraction_in_range", f.in_range},
+          {"range", {0.7, 1.4}},
+          {"short_fraction", f.short_fraction},
+          {"long_fraction", f.long_fraction},
+          {"min_ratio", f.min_ratio},
+          {"max_ratio", f.max_ratio}};
+}
+
+/// The Delaunay tetrahedralization of the final nodes, verified as `kdmesh delaunay --check`
+/// does (validity; with `references` also TetGen 1.5 and CGAL 5.5).
+DelaunayVerification check_nodes_delaunay(const MeshJob& job, const PointSet& pts,
+                                          const std::function<void(const std::string&)>& log) {
+  const DelaunayResult r = delaunay(pts, make_order(pts, job.order));
+  std::vector<std::uint32_t> tets = finite_tets(r.tri);
+  const std::vector<std::uint32_t> canon = canonical_point_ids(pts);
+  for (auto& x : tets) x = canon[x];
+  DelaunayVerifyOptions o;
+  o.references = job.check_tetgen;
+  o.seed = job.seed;
+  o.stage = log;
+  return verify_delaunay(pts, r.tri, tets, o);
+}
+
+/// Writes `text` to `path` (no atomicity here: the caller passes a temporary path).
+void write_text(const std::string& path, const std::string& text, const std::string& target) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  f << text;
+  f.close();
+  if (!f) throw OutputError(target, "cannot write");
+}
+
+void make_parent_dirs(const std::string& path) {
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  if (parent.empty()) return;
+  std::error_code ec;
+  std::filesystem::create_directories(parent, ec);
+  if (ec) throw OutputError(path, "cannot create directory '" + parent.string() + "': " + ec.message());
+}
+
+/// The pipeline; fills `j` as it goes, so a failure still reports what was measured. Throws.
+void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json& j) {
+  auto log = [&](const std::string& s) {
+    if (cb.log) cb.log(s);
+  };
+  auto progress = [&](const std::string& stage, double f) {
+    if (cb.progress) cb.progress(stage, f);
+  };
+  if (!(job.scale > 0)) throw UsageError("job '" + job.name + "': scale must be > 0");
+  if (!(job.sizing.max_size > 0)) throw UsageError("job '" + job.name + "': size must be > 0");
+  Stopwatch total, clock;
+  nlohmann::json& sec = j["seconds"];
+  nlohmann::json& counts = j["counts"];
+  j["notices"] = nlohmann::json::array();
+
+  log("reading " + job.input);
+  SurfaceMesh raw = read_surface(job.input);
+  sec["read"] = clock.seconds();
+
+  clock.reset();
+  log("preparing the surface (" + std::to_string(raw.points.size()) + " points, " +
+      std::to_string(raw.num_tris()) + " facets)");
+  SurfaceOptions so;
+  so.scale = job.scale;
+  so.notice = [&](const std::string& n) {
+    j["notices"].push_back(n);
+    log("notice: " + n);
+  };
+  const PreparedSurface surface = prepare_surface(std::move(raw), job.input, so);
+  sec["prepare"] = clock.seconds();
+  counts["surface_points"] = surface.mesh.points.size();
+  counts["surface_facets"] = surface.mesh.num_tris();
+  counts["shells"] = surface.shell_body.size();
+  counts["bodies"] = surface.num_bodies;
+  j["solid_volume"] = surface.volume;
+  j["bbox"] = {{"min", {surface.bbox_min[0], surface.bbox_min[1], surface.bbox_min[2]}},
+               {"max", {surface.bbox_max[0], surface.bbox_max[1], surface.bbox_max[2]}}};
+
+  clock.reset();
+  {
+    std::ostringstream m;
+    m << "sharp features (angle " << job.sharp_angle << " deg)";
+    log(m.str());
+  }
+  const FeatureEdges features = detect_sharp_edges(surface.mesh, job.sharp_angle);
+  sec["features"] = clock.seconds();
+  counts["feature_edges"] = features.num_edges();
+  counts["feature_corners"] = features.corners.size();
+
+  clock.reset();
+  log("sizing field (" + std::to_string(job.sizing.zones.size()) + " zones)");
+  const SizingField sizing = build_sizing_field(surface.mesh, job.sizing);
+  sec["sizing"] = clock.seconds();
+
+  clock.reset();
+  const SurfaceQuery query(surface.mesh);
+  sec["query"] = clock.seconds();
+
+  clock.reset();
+  log("placing nodes");
+  PlacementOptions po;
+  po.seed = job.seed;
+  po.progress = progress;
+  NodeSet nodes = place_nodes(surface, query, features, sizing, po);
+  sec["place"] = clock.seconds();
+  counts["placed_nodes"] = nodes.points.size();
+
+  clock.reset();
+  log("meshing " + std::to_string(nodes.points.size()) + " nodes (order " +
+      std::string(order_kind_name(job.order.kind)) + ")");
+  VolumeMeshOptions vo;
+  vo.order = job.order;
+  vo.order.seed = job.seed;
+  vo.progress = progress;
+  const VolumeMesh mesh = mesh_volume(surface, query, sizing, std::move(nodes), vo);
+  sec["mesh"] = clock.seconds();
+  sec["mesh_stages"] = {{"order", mesh.stats.order_seconds},
+                        {"delaunay", mesh.stats.delaunay_seconds},
+                        {"classify", mesh.stats.classify_seconds},
+                        {"recover", mesh.stats.recover_seconds}};
+  std::array<std::size_t, 4> by_kind{};
+  for (NodeKind k : mesh.nodes.kind) ++by_kind[std::size_t(k) & 3];
+  counts["nodes"] = mesh.nodes.points.size();
+  counts["nodes_by_kind"] = {{"corner", by_kind[0]}, {"edge", by_kind[1]},
+                             {"surface", by_kind[2]}, {"interior", by_kind[3]}};
+  counts["steiner_points"] = mesh.stats.steiner_points;
+  counts["dropped_nodes"] = mesh.stats.dropped_nodes;
+  counts["steiner_rounds"] = mesh.stats.rounds;
+  counts["tets"] = mesh.num_tets();
+  counts["boundary_faces"] = mesh.boundary.size() / 3;
+
+  bool delaunay_ok = true;
+  if (job.check_tetgen || job.check_delaunay) {
+    clock.reset();
+    log("checking the Delaunay tetrahedralization of the nodes");
+    DelaunayVerification v = check_nodes_delaunay(job, mesh.nodes.points, log);
+    delaunay_ok = v.pass;
+    j["delaunay_check"] = std::move(v.json);
+    j["delaunay_check"]["report"] = v.report;
+    sec["delaunay_check"] = clock.seconds();
+  }
+
+  clock.reset();
+  log("checking the mesh");
+  const MeshCheck check = check_volume_mesh(mesh, surface, query, sizing);
+  sec["mesh_check"] = clock.seconds();
+  j["mesh_check"] = mesh_check_json(check);
+
+  clock.reset();
+  TetMesh tm = to_tet_mesh(mesh);
+  const QualitySummary q = summarize_quality(tm);
+  j["quality"] = quality_json(q);
+  j["size_fidelity"] = size_fidelity_json(measure_size_fidelity(mesh.nodes.points, mesh.tets, sizing));
+  sec["quality"] = clock.seconds();
+
+  if (!check.ok()) {
+    std::string what = "job '" + job.name + "': the mesh failed its validity check:";
+    for (const std::string& f : check.failures) what += "\n  " + f;
+    throw CheckError(what + "\nno output was written");
+  }
+  if (!delaunay_ok)
+    throw CheckError("job '" + job.name +
+                     "': the Delaunay tetrahedralization of the nodes failed its check:\n" +
+                     j["delaunay_check"]["report"].get<std::string>() + "no output was written");
+
+  // Outputs: every file to a temporary first; all renamed into place only once all are written.
+  clock.reset();
+  std::vector<std::unique_ptr<AtomicFile>> files;
+  nlohmann::json outputs = nlohmann::json::object();
+  auto open = [&](const std::string& path, const char* key) -> const std::string& {
+    make_parent_dirs(path);
+    files.push_back(std::make_unique<AtomicFile>(path));
+    outputs[key] = path;
+    return files.back()->temp_path();
+  };
+  if (!job.vtu.empty()) {
+    log("writing " + job.vtu);
+    write_vtu(tm, open(job.vtu, "vtu"));
+  }
+  if (!job.nodes.empty()) {
+    log("writing " + job.nodes);
+    write_xyz(mesh.nodes.points, open(job.nodes, "nodes"));
+  }
+  std::string summary_tmp;
+  if (!job.summary.empty()) summary_tmp = open(job.summary, "summary");
+  j["outputs"] = outputs;
+  j["status"] = "ok";
+  sec["write"] = clock.seconds();
+  sec["total"] = total.seconds();
+  if (!job.summary.empty()) {
+    log("writing " + job.summary);
+    write_text(summary_tmp, j.dump(2) + "\n", job.summary);
+  }
+  for (auto& f : files) f->commit();
+}
+
+}  // namespace
+
+MeshJobResult run_mesh_job(const MeshJob& job, const MeshJobCallbacks& callbacks) {
+  MeshJobResult r;
+  Stopwatch total;
+  try {
+    r.summary = {{"job", job.name}, {"input", job.input}, {"status", "running"}};
+    if (!job.origin.empty()) r.summary["defined_at"] = job.origin;
+    r.summary["options"] = {{"scale", job.scale},
+                            {"size", job.sizing.max_size},
+                            {"min_size", job.sizing.min_size},
+                            {"gradation", job.sizing.gradation},
+                            {"zones", job.sizing.zones.size()},
+                            {"sharp_angle", job.sharp_angle},
+                            {"order", std::string(order_kind_name(job.order.kind))},
+                            {"seed", job.seed},
+                            {"check_tetgen", job.check_tetgen},
+                            {"check_delaunay", job.check_delaunay}};
+    run_pipeline(job, callbacks, r.summary);
+    return r;
+  } catch (const Error& e) {
+    r.code = e.code();
+    r.summary["error"] = {{"type", dynamic_cast<const SurfaceError*>(&e) ? "surface" : error_type_name(e.code())},
+                          {"exit_code", int(e.code())},
+                          {"message", e.what()}};
+  } catch (const std::bad_alloc&) {
+    r.code = ExitCode::failure;
+    r.summary["error"] = {{"type", "internal"}, {"exit_code", 1}, {"message", "out of memory"}};
+  } catch (const std::exception& e) {
+    r.code = ExitCode::failure;
+    r.summary["error"] = {{"type", "internal"}, {"exit_code", 1},
+                          {"message", std::string("internal error: ") + e.what()}};
+  } catch (...) {
+    r.code = ExitCode::failure;
+    r.summary["error"] = {{"type", "internal"}, {"exit_code", 1}, {"message", "unknown internal error"}};
+  }
+  // Failed: the summary says so; no output exists (AtomicFile removed every temporary).
+  try {
+    r.summary["status"] = "failed";
+    r.summary.erase("outputs");
+    r.summary["seconds"]["total"] = total.seconds();
+  } catch (...) {
+  }
+  return r;
+}
+
+}  // namespace kdmesh

@@ -1,0 +1,79 @@
+// kdmesh — one meshing job (surface file -> checked tet mesh + summary), the whole pipeline.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "core/error.h"
+#include "mesher/order.h"
+#include "sizing/sizing_field.h"
+
+namespace kdmesh {
+
+/// Everything one run of the pipeline needs (what `kdmesh mesh` options and one entry of a
+/// batch file map to; see tools/lib/job_config.h for the YAML schema).
+struct MeshJob {
+  std::string name;            ///< job name (messages, summaries)
+  std::string origin;          ///< where it was defined, e.g. "jobs.yaml:12" (may be empty)
+  std::string input;           ///< STL or PLY surface, a path usable as is
+  double scale = 1;            ///< coordinates are multiplied by it (> 0)
+  double sharp_angle = 30;     ///< degrees; feature edges kept in the mesh; 0 = none
+  SizingOptions sizing;        ///< max_size (> 0) is the job's `size`
+  OrderOptions order;          ///< insertion order; order.seed == seed
+  std::uint64_t seed = 1;      ///< node placement and order seed
+  bool check_tetgen = false;   ///< compare the nodes' Delaunay with TetGen 1.5 and CGAL 5.5
+  bool check_delaunay = false; ///< exact validity check of the nodes' Delaunay
+  std::string vtu, summary, nodes;  ///< output paths (usable as is); empty = not written
+};
+
+/// Callbacks of a running job; each may be empty. They are called from the job's thread.
+struct MeshJobCallbacks {
+  /// A stage starts or a notice is emitted (one line, no trailing newline).
+  std::function<void(const std::string& message)> log;
+  /// Progress inside a long stage: stage name ("interior", "delaunay", ...) and fraction in [0, 1].
+  std::function<void(const std::string& stage, double fraction)> progress;
+};
+
+struct MeshJobResult {
+  ExitCode code = ExitCode::ok;  ///< ok, or the class of the error that failed the job
+  /// The job's summary (also written to job.summary when it succeeds):
+  ///   job, input, status ("ok" | "failed"),
+  ///   counts {surface_points, surface_facets, shells, bodies, feature_edges, feature_corners,
+  ///           placed_nodes, nodes, nodes_by_kind {corner, edge, surface, interior},
+  ///           steiner_points, dropped_nodes, steiner_rounds, tets, boundary_faces},
+  ///   seconds {read, prepare, features, sizing, query, place, mesh, delaunay_check, mesh_check,
+  ///            quality, write, total},
+  ///   size_fidelity {edges, mean_ratio, fraction_in_range, range [0.7, 1.4]},
+  ///   quality {tets, inverted, min_dihedral, max_dihedral (degrees), mean_radius_ratio,
+  ///            min_radius_ratio, max_radius_edge, min_dihedral_hist, radius_ratio_hist},
+  ///   mesh_check {... every MeshCheck figure ..., pass, failures},
+  ///   delaunay_check (when asked), notices [...], outputs {vtu, summary, nodes},
+  ///   error {type, exit_code, message} (failed jobs only).
+  /// Keys of stages a failed job never reached are absent.
+  nlohmann::json summary;
+  bool ok() const { return code == ExitCode::ok; }
+};
+
+/// Runs the pipeline for one job:
+///   read -> prepare (scale) -> sharp features -> sizing field -> surface query -> node placement
+///   -> volume mesh -> [Delaunay checks of the final nodes] -> mesh check -> quality and size
+///   fidelity -> outputs.
+/// Never throws: every error (typed kdmesh::Error, bad_alloc, any std::exception) is caught and
+/// returned in the result with its exit code, so that one job cannot affect another. A failed
+/// mesh check (or Delaunay check) fails the job with ExitCode::check. A failed job writes no
+/// output at all: every output is first written to a temporary file, and all are renamed into
+/// place only once every one of them has been written.
+MeshJobResult run_mesh_job(const MeshJob& job, const MeshJobCallbacks& callbacks = {});
+
+/// A short human-readable table of a job summary (counts, quality, size fidelity, check,
+/// times, outputs or the error), one item per line, each line ending in '\n'.
+std::string format_job_report(const nlohmann::json& summary);
+
+/// The error class name used in summaries: "input", "surface", "geometry", "check", "output",
+/// "usage", "internal" (exit codes of core/error.h).
+std::string error_type_name(ExitCode code);
+
+}  // namespace kdmesh
