@@ -255,6 +255,7 @@ InteriorFillStats fill_interior(const SurfaceMesh& surface, const double* lo, co
   // (finer) levels accepted before (`others`) only if there are any. The
   // result equals testing everything against one grid, at a fraction of the cost.
   SpacingGrid others(grid.lo(), grid.s0());
+  others.set_lipschitz(sizing.options().gradation);
   std::vector<const Candidate*> accepted;
   for (int k = levels - 1; k >= 0; --k) {
     const std::size_t first = accepted.size();

@@ -64,6 +64,7 @@ NodeSet place_nodes(const PreparedSurface& surface, const SurfaceQuery& query,
                              std::ldexp(extent, -17));
   const double glo[3] = {lo[0] - extent, lo[1] - extent, lo[2] - extent};
   SpacingGrid grid(glo, s0);
+  grid.set_lipschitz(sizing.options().gradation);
   NodeSet nodes;
 
   progress("edges", 0);

@@ -101,6 +101,9 @@ bool SpacingGrid::conflicts(const double* p, double h, double beta) const {
     // Nodes of this level have h_q < 2 s (level 0: h_q < 2 s0 or smaller), so a conflict
     // needs |p - q| < beta * (h + 2 s) / 2.
     const double reach = beta * (h + 2 * s) / 2;
+    // Lipschitz skip: q at this level has h_q < 2 s (stored values; 1e-4 slack covers the
+    // float rounding of sizes stored in a NodeSet), so |p - q| >= (h - h_q) / g > reach.
+    if (lipschitz_ > 0 && h - 2.0002 * s > lipschitz_ * reach) continue;
     std::int64_t lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
       lo[a] = std::int64_t(std::floor((p[a] - reach - lo_[a]) / s));

@@ -20,6 +20,12 @@ class SpacingGrid {
 
   /// Adds node (p, h); returns its id in this grid (0, 1, 2, ... in insertion order).
   std::uint32_t insert(const double* p, double h);
+  /// Declares that every h given to insert() and conflicts() is a value of one size field
+  /// that is g-Lipschitz (|h(p) - h(q)| <= g |p - q|; kdmesh's sizing fields are, with g their
+  /// gradation). A query can then skip a whole level of small nodes: a node q with h_q < 2 s
+  /// is at least (h - h_q) / g from p, beyond reach when h is large. Without it, a query with
+  /// h = 3 scans ~18^3 empty cells of the level of h = 0.15 (minutes on a refined block).
+  void set_lipschitz(double g) { lipschitz_ = g; }
   /// True if some stored node q conflicts with (p, h) for this beta (see above).
   bool conflicts(const double* p, double h, double beta) const;
   std::size_t size() const { return h_.size(); }
@@ -43,6 +49,7 @@ class SpacingGrid {
   std::vector<std::uint32_t> heads_;   // hash table: first node of the cell
   std::size_t used_ = 0;
   std::uint32_t level_mask_ = 0;       // bit l set when level l holds a node
+  double lipschitz_ = 0;               // 0: unknown (no level is skipped)
 };
 
 }  // namespace kdmesh

@@ -158,24 +158,58 @@ void place_surface_nodes(const SurfaceMesh& surface, const SizingField& sizing,
       try_add(r1 * bx + r2 * cx, r2 * cy);
       advance();
     }
-    // Sweep: every point of a grid a + (i/m1)(b - a) + (j/m2)(c - a) (facet edges and
-    // corners included) with steps <= r_min / 2 is tried, so that no surface point is left
-    // farther than about beta h + r_min / 2 from a node, also where neighbouring facets'
-    // nodes cut this facet's free area into pieces the darts missed.
-    const double rmin = options.beta * std::max(sizing.min_size(), 1e-300);
-    const double lc = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    const double r_sweep = std::max(rmin, 0.5 * std::min({rc, options.beta * sizing(a),
-                                                          options.beta * sizing(b),
-                                                          options.beta * sizing(c)}));
-    const std::int64_t m1 = std::clamp<std::int64_t>(std::int64_t(std::ceil(lu / r_sweep)), 1, 4096);
-    const std::int64_t m2 = std::clamp<std::int64_t>(std::int64_t(std::ceil(lc / r_sweep)), 1, 4096);
-    for (std::int64_t i = 0; i <= m1; ++i)
-      for (std::int64_t j = 0; i * m2 + j * m1 <= m1 * m2; ++j) {
-        const double vv = double(i) / double(m1);
-        const double w = i * m2 + j * m1 == m1 * m2 ? 1 - vv : double(j) / double(m2);
-        try_bary(vv, w, vv * bx + w * cx, w * cy);
-        advance();
+    // Sweep, adaptively: the facet is split at its edge midpoints into 4 pieces, recursively,
+    // until a piece is small against the local size: diameter D <= 8 r at its centroid and
+    // g D <= h_c / 2 (h is g-Lipschitz, so h >= h_c - g D >= h_c / 2 over the piece). Each
+    // piece's grid u a + v b + w c (its edges and corners included) then has steps <=
+    // r_lo / 2, r_lo = beta max(h_min, h_c - g D) (g: the gradation), so that no surface point is left farther than
+    // about beta h + r / 2 from a node, also where neighbouring facets' nodes cut this facet's
+    // free area into pieces the darts missed. A uniform grid at the facet's smallest r instead
+    // cost O(area / r_min^2): minutes on a long housing wall refined at one end.
+    const double grad = sizing.options().gradation;
+    const double hfloor = std::max(sizing.min_size(), 1e-300);
+    struct Piece {
+      double v[3], w[3];  // barycentric (v, w) of the piece's corners in the facet
+      int depth;
+    };
+    std::vector<Piece> pieces{{{0, 1, 0}, {0, 0, 1}, 0}};
+    while (!pieces.empty()) {
+      const Piece q = pieces.back();
+      pieces.pop_back();
+      double X[3], Y[3];
+      for (int k = 0; k < 3; ++k) {
+        X[k] = q.v[k] * bx + q.w[k] * cx;
+        Y[k] = q.w[k] * cy;
       }
+      const double D = std::max({std::hypot(X[1] - X[0], Y[1] - Y[0]),
+                                 std::hypot(X[2] - X[0], Y[2] - Y[0]),
+                                 std::hypot(X[2] - X[1], Y[2] - Y[1])});
+      const double vc = (q.v[0] + q.v[1] + q.v[2]) / 3, wc = (q.w[0] + q.w[1] + q.w[2]) / 3;
+      double pc[3];
+      for (int k = 0; k < 3; ++k) pc[k] = a[k] + vc * (b[k] - a[k]) + wc * (c[k] - a[k]);
+      const double hc = sizing(pc);
+      if (q.depth < 40 && (D > 8 * options.beta * hc || grad * D > 0.5 * hc)) {
+        const double mv[3] = {(q.v[0] + q.v[1]) / 2, (q.v[1] + q.v[2]) / 2, (q.v[2] + q.v[0]) / 2};
+        const double mw[3] = {(q.w[0] + q.w[1]) / 2, (q.w[1] + q.w[2]) / 2, (q.w[2] + q.w[0]) / 2};
+        const int d = q.depth + 1;
+        // Pushed in reverse so that they are swept corner 0, 1, 2, then the middle piece.
+        pieces.push_back({{mv[0], mv[1], mv[2]}, {mw[0], mw[1], mw[2]}, d});
+        pieces.push_back({{mv[2], mv[1], q.v[2]}, {mw[2], mw[1], q.w[2]}, d});
+        pieces.push_back({{mv[0], q.v[1], mv[1]}, {mw[0], q.w[1], mw[1]}, d});
+        pieces.push_back({{q.v[0], mv[0], mv[2]}, {q.w[0], mw[0], mw[2]}, d});
+        continue;
+      }
+      const double step = 0.5 * options.beta * std::max(hfloor, hc - grad * D);
+      const std::int64_t m = std::clamp<std::int64_t>(std::int64_t(std::ceil(D / step)), 1, 4096);
+      for (std::int64_t i = 0; i <= m; ++i)
+        for (std::int64_t j = 0; i + j <= m; ++j) {
+          const double s1 = double(i) / double(m), s2 = double(j) / double(m);
+          const double vv = q.v[0] + s1 * (q.v[1] - q.v[0]) + s2 * (q.v[2] - q.v[0]);
+          const double ww = q.w[0] + s1 * (q.w[1] - q.w[0]) + s2 * (q.w[2] - q.w[0]);
+          try_bary(vv, ww, vv * bx + ww * cx, ww * cy);
+          advance();
+        }
+    }
   }
   if (progress) progress(1.0);
 }
