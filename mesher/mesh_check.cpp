@@ -3,6 +3,7 @@
 // own bookkeeping is trusted (mesh.boundary is only compared against the recomputed faces).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "mesher/mesh_check.h"
+#include "mesher/quality.h"
 
 #include <algorithm>
 #include <array>
@@ -69,6 +70,7 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const PreparedSurface& surfa
       const std::uint32_t* v = &mesh.tets[4 * t];
       const double *a = pts.p(v[0]), *bb = pts.p(v[1]), *cc = pts.p(v[2]), *d = pts.p(v[3]);
       if (pred::orient3d(a, bb, cc, d) <= 0) bad_orient[t] = 1;
+      else if (tet_quality(a, bb, cc, d).volume_length < 1e-9) bad_orient[t] = 2;  // zero volume
       double m[3];
       for (int k = 0; k < 3; ++k) m[k] = (a[k] + bb[k] + cc[k] + d[k]) / 4;
       if (query.side(m) != 1) outside[t] = 1;
@@ -82,9 +84,10 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const PreparedSurface& surfa
   }, 1024, 64);
   for (double v : vol_part) c.mesh_volume += v;
   {
-    std::ostringstream o, s;
+    std::ostringstream o, s, f;
     for (std::size_t t = 0; t < nt; ++t) {
-      if (bad_orient[t] && c.nonpositive_tets++ < kShow) o << " " << t;
+      if (bad_orient[t] == 1 && c.nonpositive_tets++ < kShow) o << " " << t;
+      if (bad_orient[t] == 2 && c.flat_tets++ < kShow) f << " " << t;
       if (outside[t] && c.outside_tets++ < kShow) {
         const std::uint32_t* v = &mesh.tets[4 * t];
         double m[3];
@@ -94,6 +97,8 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const PreparedSurface& surfa
     }
     if (c.nonpositive_tets)
       c.failures.push_back(std::to_string(c.nonpositive_tets) + " tet(s) not positively oriented (exact orient3d <= 0), e.g. tet" + o.str());
+    if (c.flat_tets)
+      c.failures.push_back(std::to_string(c.flat_tets) + " tet(s) of zero volume at rounding level (volume-length ratio < 1e-9), e.g. tet" + f.str());
     if (c.outside_tets)
       c.failures.push_back(std::to_string(c.outside_tets) + " tet(s) with the centroid not strictly inside the solid, e.g. tet" + s.str());
   }

@@ -16,6 +16,7 @@ namespace kdmesh {
 struct MeshCheck {
   std::size_t tets = 0, boundary_faces = 0;
   std::size_t nonpositive_tets = 0;      ///< exact orient3d <= 0
+  std::size_t flat_tets = 0;             ///< positive but zero at rounding level: volume-length < 1e-9
   std::size_t outside_tets = 0;          ///< centroid not strictly inside the solid
   std::size_t offsurface_vertices = 0;   ///< boundary-face vertices farther than 1e-9*bbox from the surface
   std::size_t offsurface_faces = 0;      ///< boundary faces beyond the Hausdorff tolerance

@@ -665,6 +665,34 @@ TEST_F(CheckNegative, InvertedTet) {
   EXPECT_TRUE(mentions(c, "not positively oriented (exact orient3d <= 0), e.g. tet 5")) << failures(c);
 }
 
+// A tet whose volume is positive only at rounding level (the gear box had 23 such surface
+// slivers before they were classified outside) is a zero-volume element: reported.
+TEST_F(CheckNegative, ZeroVolumeTetAtRoundingLevel) {
+  const std::uint32_t* v = &vm.tets[4 * 5];
+  // Move the 4th vertex of tet 5 onto the plane of the other three, plus 1e-14 of the
+  // normal: exactly positive for orient3d, volume-length ~1e-14.
+  double a[3], b[3], c[3];  // copies: push_back below may move the coordinates
+  for (int k = 0; k < 3; ++k) {
+    a[k] = vm.nodes.points.p(v[0])[k];
+    b[k] = vm.nodes.points.p(v[1])[k];
+    c[k] = vm.nodes.points.p(v[2])[k];
+  }
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+  const double nn = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  const double p[3] = {(a[0] + b[0] + c[0]) / 3 + 1e-14 * n[0] / nn * 8,
+                       (a[1] + b[1] + c[1]) / 3 + 1e-14 * n[1] / nn * 8,
+                       (a[2] + b[2] + c[2]) / 3 + 1e-14 * n[2] / nn * 8};
+  vm.nodes.push_back(p, NodeKind::interior, kNoFacet, 1.0f);
+  vm.tets[4 * 5 + 3] = std::uint32_t(vm.nodes.size_count() - 1);
+  ASSERT_GT(pred::orient3d(a, b, c, p), 0);
+  const MeshCheck c2 = check_volume_mesh(vm, s, *q, h);
+  EXPECT_FALSE(c2.ok());
+  EXPECT_EQ(c2.flat_tets, 1u);
+  EXPECT_TRUE(mentions(c2, "zero volume at rounding level")) << failures(c2);
+}
+
 /// Unit cubes at the given integer offsets, each split into the 6 Kuhn tets (0, e_a, e_a+e_b, 1),
 /// shared corners merged: a mesh built by hand for the topology figures of the checker.
 VolumeMesh kuhn_cubes(const std::vector<std::array<int, 3>>& offsets) {

@@ -137,6 +137,7 @@ nlohmann::json mesh_check_json(const MeshCheck& c) {
           {"tets", c.tets},
           {"boundary_faces", c.boundary_faces},
           {"nonpositive_tets", c.nonpositive_tets},
+          {"flat_tets", c.flat_tets},
           {"outside_tets", c.outside_tets},
           {"offsurface_vertices", c.offsurface_vertices},
           {"offsurface_faces", c.offsurface_faces},
