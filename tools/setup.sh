@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # kdmesh setup: install Debian 12 dependencies (if missing), build, then run a goal.
 #
-#   bash tools/setup.sh demo    install + build + mesh a shipped sample (README command 1)
+#   bash tools/setup.sh demo    install + build + mesh the shipped models (README command 1)
 #   bash tools/setup.sh test    install + build + run the whole test suite (README command 2)
 #   bash tools/setup.sh sanitize  install + build with ASan/UBSan (CMake preset "sanitize") + run all tests
 #   bash tools/setup.sh fuzz    install + run each libFuzzer target FUZZ_SECONDS (default 60) s
@@ -83,10 +83,8 @@ case "$goal" in
     ;;
   demo)
     install_deps; build
-    mkdir -p out
-    "$BUILD_DIR/kdmesh" points --dist cube -n 200000 --seed 1 -o out/cube-200k.xyz
-    "$BUILD_DIR/kdmesh" delaunay out/cube-200k.xyz --order kd-bfs --check -o out/cube-200k.vtu
-    echo "setup: wrote out/cube-200k.vtu"
+    "$BUILD_DIR/kdmesh" batch models/all.yaml --jobs 2 --out-dir out
+    echo "setup: wrote out/gearbox.vtu and out/block.vtu (summaries: out/*.json)"
     ;;
   *) echo "usage: bash tools/setup.sh {demo|test|sanitize|fuzz|build|deps}" >&2; exit 2 ;;
 esac

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <memory>
 #include <iostream>
 
 namespace kdmesh::cli {
@@ -15,7 +16,16 @@ void Output::stage(const std::string& msg) const {
 }
 
 std::function<void(double)> Output::progress(const std::string& what) const {
-  if (quiet || !isatty(STDERR_FILENO)) return {};
+  if (quiet) return {};
+  if (!isatty(STDERR_FILENO)) {  // logs: one whole line per 25% step
+    auto last = std::make_shared<int>(-1);
+    return [what, last](double f) {
+      const int step = int(f * 4);
+      if (step <= *last) return;
+      *last = step;
+      std::fprintf(stderr, "kdmesh: %s %d%%\n", what.c_str(), 25 * step);
+    };
+  }
   return [what](double f) {
     std::fprintf(stderr, "\rkdmesh: %s %5.1f%%%s", what.c_str(), 100.0 * f, f >= 1.0 ? "\n" : "");
     std::fflush(stderr);

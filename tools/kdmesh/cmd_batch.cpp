@@ -104,20 +104,21 @@ int run_batch(const Options& o) {
   auto worker = [&] {
     for (std::size_t i; (i = next.fetch_add(1)) < jobs.size();) {
       const MeshJob& job = jobs[i];
-      // Whole progress lines, one per 10% step (on a terminal only: logs stay readable).
+      // Whole progress lines: one per 10% step on a terminal, one per 25% in logs.
       auto last = std::make_shared<std::map<std::string, int>>();
       MeshJobCallbacks cb;
       cb.log = [&, name = job.name](const std::string& s) { log(name, s); };
-      if (tty)
+      if (!out.quiet)
         cb.progress = [&, last, name = job.name](const std::string& stage, double f) {
-          const int step = int(f * 10);
+          const int unit = tty ? 10 : 25;
+          const int percent = int(f * 100) / unit * unit;
           {  // stages may report from worker threads
             std::lock_guard<std::mutex> lock(log_mutex);
             int& prev = last->try_emplace(stage, -1).first->second;
-            if (step <= prev) return;
-            prev = step;
+            if (percent <= prev) return;
+            prev = percent;
           }
-          log(name, stage + " " + std::to_string(step * 10) + "%");
+          log(name, stage + " " + std::to_string(percent) + "%");
         };
       try {
         results[i] = run_mesh_job(job, cb);  // never throws by contract; guarded all the same
