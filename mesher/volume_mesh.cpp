@@ -317,7 +317,9 @@ VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query
     sw.reset();
     bf = boundary_faces(dr.tri, inside);
     const BoundaryJudgement judge =
-        judge_boundary(bf, nodes, surface, query, sizing, options.hausdorff_tolerance);
+        // 0.8 x the tolerance: the mesher samples each face at its centroid and edge midpoints,
+        // the independent check more densely, so the margin keeps its verdict the same.
+        judge_boundary(bf, nodes, surface, query, sizing, 0.8 * options.hausdorff_tolerance);
     const bool good = judge.bad_faces.empty() && judge.bad_edges.empty() && judge.bad_vertices.empty();
     if (good) {
       st.recover_seconds += sw.seconds();
@@ -378,6 +380,10 @@ VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query
       PointGrid grid(cell > 0 ? cell : 1e-3 * diag, bmin);
       for (std::size_t i = 0; i < nodes.size_count(); ++i)
         if (!drop[i]) grid.add(nodes.points.p(std::uint32_t(i)));
+      // The admissible gap starts at 0.2 h and halves (down to 0.0125 h) while no candidate
+      // is admissible: parts thinner than h (real scans and CAD at a coarse size) need Steiner
+      // points closer than 0.2 h to the nodes already on the other side.
+      for (double gap = 0.2; steiner.size_count() == 0 && gap >= 0.0125; gap /= 2)
       for (std::size_t k = 0; k < candidates.size(); ++k) {
         for (int attempt = 0; attempt < 3; ++attempt) {
           double p[3];
@@ -391,7 +397,7 @@ VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query
             query.closest(attempt == 0 ? candidates[k].data() : fallbacks[k].data(), p, &facet);
           }
           const double h = sizing(p);
-          if (grid.any_within(p, 0.2 * h)) continue;
+          if (grid.any_within(p, gap * h)) continue;
           grid.add(p);
           steiner.push_back(p, kind, facet, float(h));
           steiner_hint.push_back(cand_hint[k]);
