@@ -32,14 +32,24 @@ class Error : public std::runtime_error {
 class InputError : public Error {
  public:
   InputError(const std::string& file, std::uint64_t line, const std::string& msg)
-      : Error(file + (line ? ":" + std::to_string(line) : std::string()) + ": " + msg,
-              ExitCode::input),
+      : Error(where(file, line) + msg, ExitCode::input),
         file_(file),
         line_(line) {}
   const std::string& file() const { return file_; }
   std::uint64_t line() const { return line_; }
 
  private:
+  /// "file:line: " (or "file: "), appended piece by piece: `":" + std::to_string(line)` made
+  /// GCC 12 warn falsely (-Wrestrict, GCC bug 105329) wherever this was inlined.
+  static std::string where(const std::string& file, std::uint64_t line) {
+    std::string s = file;
+    if (line) {
+      s += ':';
+      s += std::to_string(line);
+    }
+    s += ": ";
+    return s;
+  }
   std::string file_;
   std::uint64_t line_;
 };

@@ -1,4 +1,6 @@
+// kdmesh — point-set readers (.xyz, TetGen .node, PLY vertices) and the .xyz writer.
 // SPDX-License-Identifier: AGPL-3.0-or-later
+//
 // Point-set readers (.xyz, TetGen .node, PLY) and the .xyz writer.
 //
 // Every reader loads the whole file into memory and parses it in place with std::from_chars
@@ -12,7 +14,6 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cctype>
 #include <cerrno>
 #include <charconv>
@@ -26,6 +27,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "io/ply_format.h"
 
 namespace kdmesh {
 
@@ -131,24 +133,14 @@ std::size_t split(std::string_view s, std::array<std::string_view, N>& out) {
   return count;
 }
 
-/// Same, into a reusable vector (cleared first; keeps its capacity across calls).
-void split(std::string_view s, std::vector<std::string_view>& out) {
-  out.clear();
-  std::size_t i = 0;
-  while (i < s.size()) {
-    while (i < s.size() && is_blank(s[i])) ++i;
-    if (i == s.size()) break;
-    const std::size_t start = i;
-    while (i < s.size() && !is_blank(s[i])) ++i;
-    out.push_back(s.substr(start, i - start));
-  }
-}
-
 /// A token quoted for an error message, shortened if long.
 std::string quote_token(std::string_view tok) {
   constexpr std::size_t kMax = 40;
-  if (tok.size() > kMax) return "'" + std::string(tok.substr(0, kMax)) + "...'";
-  return "'" + std::string(tok) + "'";
+  // Appended piece by piece: "'" + std::string(...) trips a GCC 12 -Wrestrict false positive.
+  std::string s = "'";
+  s.append(tok.substr(0, kMax));
+  s += tok.size() > kMax ? "...'" : "'";
+  return s;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -198,269 +190,44 @@ void append_point(PointSet& out, const std::string& path, std::uint64_t line,
 // PLY
 // ---------------------------------------------------------------------------------------------
 
-enum class PlyType : std::uint8_t { i8, u8, i16, u16, i32, u32, f32, f64 };
-
-bool parse_ply_type(std::string_view s, PlyType& t) {
-  struct Name {
-    std::string_view name;
-    PlyType type;
-  };
-  static constexpr Name kNames[] = {
-      {"char", PlyType::i8},     {"int8", PlyType::i8},     {"uchar", PlyType::u8},
-      {"uint8", PlyType::u8},    {"short", PlyType::i16},   {"int16", PlyType::i16},
-      {"ushort", PlyType::u16},  {"uint16", PlyType::u16},  {"int", PlyType::i32},
-      {"int32", PlyType::i32},   {"uint", PlyType::u32},    {"uint32", PlyType::u32},
-      {"float", PlyType::f32},   {"float32", PlyType::f32}, {"double", PlyType::f64},
-      {"float64", PlyType::f64},
-  };
-  for (const Name& n : kNames)
-    if (n.name == s) {
-      t = n.type;
-      return true;
-    }
-  return false;
-}
-
-std::size_t ply_size(PlyType t) {
-  switch (t) {
-    case PlyType::i8:
-    case PlyType::u8:
-      return 1;
-    case PlyType::i16:
-    case PlyType::u16:
-      return 2;
-    case PlyType::i32:
-    case PlyType::u32:
-    case PlyType::f32:
-      return 4;
-    case PlyType::f64:
-      return 8;
-  }
-  return 0;
-}
-
-bool ply_is_integer(PlyType t) { return t != PlyType::f32 && t != PlyType::f64; }
-
-enum class PlyFormat { ascii, binary_le, binary_be };
-
-struct PlyProperty {
-  std::string name;
-  PlyType type = PlyType::f32;  ///< scalar type, or the item type of a list
-  bool is_list = false;
-  PlyType count_type = PlyType::u8;  ///< lists only
-  int coord = -1;                    ///< 0/1/2 for x/y/z of `vertex`, else -1
-};
-
-struct PlyElement {
-  std::string name;
-  std::uint64_t count = 0;
-  std::uint64_t line = 0;  ///< header line declaring it
-  std::vector<PlyProperty> props;
-
-  /// Fewest bytes a binary record can take (lists counted as empty).
-  std::size_t min_binary_size() const {
-    std::size_t s = 0;
-    for (const PlyProperty& p : props) s += ply_size(p.is_list ? p.count_type : p.type);
-    return s;
-  }
-};
-
-struct PlyHeader {
-  PlyFormat format = PlyFormat::ascii;
-  std::vector<PlyElement> elements;
-  std::size_t data_offset = 0;        ///< first byte after "end_header\n"
-  std::uint64_t data_first_line = 0;  ///< line number of the first data line (ascii)
-};
-
-PlyHeader parse_ply_header(const std::string& path, std::string_view data) {
-  LineCursor lines(data, /*strip_comments=*/false);
-  std::string_view line;
-  if (!lines.next(line) || line != "ply")
-    throw InputError(path, 1, "not a PLY file: the first line must be 'ply'");
-
-  PlyHeader h;
-  bool have_format = false;
-  std::vector<std::string_view> tok;
-  for (;;) {
-    if (!lines.next(line)) throw InputError(path, 0, "PLY header has no 'end_header' line");
-    const std::uint64_t ln = lines.line();
-    split(line, tok);
-    if (tok.empty()) continue;
-    const std::string_view key = tok[0];
-    auto bad = [&](const std::string& what) {
-      return InputError(path, ln, "bad PLY header line " + quote_token(line) + ": " + what);
-    };
-    if (key == "comment" || key == "obj_info") continue;
-    if (key == "end_header") {
-      if (tok.size() != 1) throw bad("unexpected text after 'end_header'");
-      break;
-    }
-    if (key == "format") {
-      if (have_format) throw bad("duplicate 'format' line");
-      if (tok.size() != 3)
-        throw bad("expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
-      if (tok[1] == "ascii")
-        h.format = PlyFormat::ascii;
-      else if (tok[1] == "binary_little_endian")
-        h.format = PlyFormat::binary_le;
-      else if (tok[1] == "binary_big_endian")
-        h.format = PlyFormat::binary_be;
-      else
-        throw bad("unknown format " + quote_token(tok[1]));
-      if (tok[2] != "1.0")
-        throw bad("unsupported PLY version " + quote_token(tok[2]) + " (only 1.0)");
-      have_format = true;
-    } else if (key == "element") {
-      PlyElement e;
-      if (tok.size() != 3 || !parse_integer(tok[2], e.count))
-        throw bad("expected 'element <name> <count>' with a non-negative count");
-      e.name = tok[1];
-      e.line = ln;
-      h.elements.push_back(std::move(e));
-    } else if (key == "property") {
-      if (h.elements.empty()) throw bad("property declared before any element");
-      PlyProperty p;
-      if (tok.size() == 5 && tok[1] == "list") {
-        p.is_list = true;
-        if (!parse_ply_type(tok[2], p.count_type) || !ply_is_integer(p.count_type))
-          throw bad("list count type " + quote_token(tok[2]) + " is not an integer type");
-        if (!parse_ply_type(tok[3], p.type)) throw bad("unknown type " + quote_token(tok[3]));
-        p.name = tok[4];
-      } else if (tok.size() == 3) {
-        if (!parse_ply_type(tok[1], p.type)) throw bad("unknown type " + quote_token(tok[1]));
-        p.name = tok[2];
-      } else {
-        throw bad("expected 'property <type> <name>' or 'property list <type> <type> <name>'");
-      }
-      PlyElement& e = h.elements.back();
-      for (const PlyProperty& q : e.props)
-        if (q.name == p.name) throw bad("duplicate property " + quote_token(p.name));
-      if (e.name == "vertex" && p.name.size() == 1 && p.name[0] >= 'x' && p.name[0] <= 'z') {
-        if (p.is_list) throw bad("vertex coordinate " + quote_token(p.name) + " must be a scalar");
-        p.coord = p.name[0] - 'x';
-      }
-      e.props.push_back(std::move(p));
-    } else {
-      throw bad("unknown keyword " + quote_token(key));
-    }
-  }
-  if (!have_format) throw InputError(path, 0, "PLY header has no 'format' line");
-  h.data_offset = data.size() - lines.remaining();
-  h.data_first_line = lines.line() + 1;
-  return h;
-}
-
-/// Loads a scalar of type T stored in the file's byte order.
-template <class T>
-T load(const unsigned char* p, bool swap) {
-  if constexpr (sizeof(T) == 1) {
-    return std::bit_cast<T>(*p);
-  } else {
-    using U = std::conditional_t<sizeof(T) == 2, std::uint16_t,
-                                 std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>>;
-    U u;
-    std::memcpy(&u, p, sizeof u);
-    if (swap) {
-      if constexpr (sizeof(T) == 2)
-        u = __builtin_bswap16(u);
-      else if constexpr (sizeof(T) == 4)
-        u = __builtin_bswap32(u);
-      else
-        u = __builtin_bswap64(u);
-    }
-    return std::bit_cast<T>(u);
-  }
-}
-
-double load_as_double(const unsigned char* p, PlyType t, bool swap) {
-  switch (t) {
-    case PlyType::i8:
-      return load<std::int8_t>(p, swap);
-    case PlyType::u8:
-      return load<std::uint8_t>(p, swap);
-    case PlyType::i16:
-      return load<std::int16_t>(p, swap);
-    case PlyType::u16:
-      return load<std::uint16_t>(p, swap);
-    case PlyType::i32:
-      return load<std::int32_t>(p, swap);
-    case PlyType::u32:
-      return load<std::uint32_t>(p, swap);
-    case PlyType::f32:
-      return load<float>(p, swap);
-    case PlyType::f64:
-      return load<double>(p, swap);
-  }
-  return 0;
-}
-
-/// A list length read from the file; negative lengths (signed count types) are returned as -1.
-std::int64_t load_count(const unsigned char* p, PlyType t, bool swap) {
-  switch (t) {
-    case PlyType::i8:
-      return std::max<std::int64_t>(-1, load<std::int8_t>(p, swap));
-    case PlyType::u8:
-      return load<std::uint8_t>(p, swap);
-    case PlyType::i16:
-      return std::max<std::int64_t>(-1, load<std::int16_t>(p, swap));
-    case PlyType::u16:
-      return load<std::uint16_t>(p, swap);
-    case PlyType::i32:
-      return std::max<std::int64_t>(-1, load<std::int32_t>(p, swap));
-    case PlyType::u32:
-      return load<std::uint32_t>(p, swap);
-    default:
-      return -1;  // floating count types are rejected by the header parser
-  }
-}
-
 /// Reads (element is `vertex`: into `out`) or skips one binary element starting at `p`;
 /// returns the first byte after it.
 const unsigned char* walk_binary_element(const std::string& path, const PlyElement& e,
                                          const unsigned char* p, const unsigned char* end,
-                                         bool swap, PointSet* out) {
-  const std::size_t min_size = e.min_binary_size();
-  if (min_size > 0 && e.count > std::uint64_t(end - p) / min_size)
+                                         PlyFormat format, PointSet* out) {
+  if (!ply_count_fits(e, format, std::size_t(end - p)))
     throw InputError(path, e.line,
                      "element '" + e.name + "' declares " + std::to_string(e.count) +
-                         " records of at least " + std::to_string(min_size) + " bytes, but only " +
-                         std::to_string(end - p) +
+                         " records of at least " +
+                         std::to_string(ply_min_record_size(e, format)) +
+                         " bytes, but only " + std::to_string(end - p) +
                          " bytes of data remain (truncated or corrupt file)");
   if (out) out->xyz.resize(3 * e.count);
 
-  auto truncated = [&](std::uint64_t i) {
-    return InputError(path, 0,
-                      "truncated data: element '" + e.name + "' record " + std::to_string(i) +
-                          " (0-based) of " + std::to_string(e.count) +
-                          " runs past the end of the file");
-  };
+  const bool swap = ply_needs_swap(format);
   for (std::uint64_t i = 0; i < e.count; ++i) {
-    for (const PlyProperty& prop : e.props) {
-      if (!prop.is_list) {
-        const std::size_t size = ply_size(prop.type);
-        if (std::size_t(end - p) < size) throw truncated(i);
-        if (out && prop.coord >= 0) {
-          const double v = load_as_double(p, prop.type, swap);
+    const PlyProperty* fault = nullptr;
+    const PlyRecordEnd status = walk_ply_binary_record(
+        e, p, end, swap, fault,
+        [&](const PlyProperty& prop, const unsigned char* bytes) {
+          if (!out || prop.role < 0) return;
+          const double v = load_ply_double(bytes, prop.type, swap);
           if (!std::isfinite(v))
             throw InputError(path, 0,
                              "non-finite coordinate " + prop.name + " of vertex " +
                                  std::to_string(i) + " (0-based)");
-          out->xyz[3 * i + std::size_t(prop.coord)] = v;
-        }
-        p += size;
-      } else {
-        const std::size_t count_size = ply_size(prop.count_type);
-        if (std::size_t(end - p) < count_size) throw truncated(i);
-        const std::int64_t n = load_count(p, prop.count_type, swap);
-        if (n < 0)
-          throw InputError(path, 0,
-                           "negative list length in property '" + prop.name + "' of element '" +
-                               e.name + "' record " + std::to_string(i) + " (0-based)");
-        p += count_size;
-        if (std::uint64_t(n) > std::size_t(end - p) / ply_size(prop.type)) throw truncated(i);
-        p += std::size_t(n) * ply_size(prop.type);
-      }
-    }
+          out->xyz[3 * i + std::size_t(prop.role)] = v;
+        },
+        [](const PlyProperty&, std::size_t, const unsigned char*) {});
+    if (status == PlyRecordEnd::truncated)
+      throw InputError(path, 0,
+                       "truncated data: element '" + e.name + "' record " + std::to_string(i) +
+                           " (0-based) of " + std::to_string(e.count) +
+                           " runs past the end of the file");
+    if (status == PlyRecordEnd::negative_list_length)
+      throw InputError(path, 0,
+                       "negative list length in property '" + fault->name + "' of element '" +
+                           e.name + "' record " + std::to_string(i) + " (0-based)");
   }
   return p;
 }
@@ -468,9 +235,7 @@ const unsigned char* walk_binary_element(const std::string& path, const PlyEleme
 /// Reads (element is `vertex`: into `out`) or skips one ascii element, one record per line.
 void walk_ascii_element(const std::string& path, const PlyElement& e, LineCursor& lines,
                         std::vector<std::string_view>& tok, PointSet* out) {
-  // Every property takes at least one character plus a separator.
-  const std::uint64_t min_size = 2 * e.props.size();
-  if (min_size > 0 && e.count > (lines.remaining() + 1) / min_size)
+  if (!ply_count_fits(e, PlyFormat::ascii, lines.remaining()))
     throw InputError(path, e.line,
                      "element '" + e.name + "' declares " + std::to_string(e.count) +
                          " records, but only " + std::to_string(lines.remaining()) +
@@ -486,7 +251,7 @@ void walk_ascii_element(const std::string& path, const PlyElement& e, LineCursor
                        "truncated data: file ends at element '" + e.name + "' record " +
                            std::to_string(i) + " (0-based) of " + std::to_string(e.count));
     const std::uint64_t ln = lines.line();
-    split(line, tok);
+    split_ply_line(line, tok);
     std::size_t k = 0;  // next token
     auto too_few = [&] {
       return InputError(path, ln,
@@ -496,11 +261,11 @@ void walk_ascii_element(const std::string& path, const PlyElement& e, LineCursor
     for (const PlyProperty& prop : e.props) {
       if (k == tok.size()) throw too_few();
       if (!prop.is_list) {
-        if (out && prop.coord >= 0) {
+        if (out && prop.role >= 0) {
           double v;
           if (!parse_coordinate(tok[k], v, why))
             throw InputError(path, ln, "vertex " + std::to_string(i) + " (0-based): " + why);
-          out->xyz[3 * i + std::size_t(prop.coord)] = v;
+          out->xyz[3 * i + std::size_t(prop.role)] = v;
         }
         ++k;
       } else {
@@ -636,7 +401,7 @@ PointSet read_ply_points(const std::string& path) {
     throw InputError(path, 0, "PLY header declares no 'vertex' element");
   for (int c = 0; c < 3; ++c)
     if (std::none_of(vertex->props.begin(), vertex->props.end(),
-                     [c](const PlyProperty& p) { return p.coord == c; }))
+                     [c](const PlyProperty& p) { return p.role == c; }))
       throw InputError(path, vertex->line,
                        std::string("element 'vertex' has no property '") + char('x' + c) + "'");
 
@@ -649,13 +414,11 @@ PointSet read_ply_points(const std::string& path) {
       walk_ascii_element(path, *e, lines, tok, nullptr);
     walk_ascii_element(path, *vertex, lines, tok, &out);
   } else {
-    const bool file_le = h.format == PlyFormat::binary_le;
-    const bool swap = file_le != (std::endian::native == std::endian::little);
     const auto* p = reinterpret_cast<const unsigned char*>(data.data()) + h.data_offset;
     const auto* end = reinterpret_cast<const unsigned char*>(data.data()) + data.size();
     for (auto e = h.elements.begin(); e != vertex; ++e)
-      p = walk_binary_element(path, *e, p, end, swap, nullptr);
-    walk_binary_element(path, *vertex, p, end, swap, &out);
+      p = walk_binary_element(path, *e, p, end, h.format, nullptr);
+    walk_binary_element(path, *vertex, p, end, h.format, &out);
   }
   return out;
 }

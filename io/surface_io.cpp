@@ -42,6 +42,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "io/ply_format.h"
 
 namespace kdmesh {
 
@@ -224,9 +225,14 @@ bool iequals(std::string_view a, std::string_view b) {
 // STL
 // ---------------------------------------------------------------------------------------------
 
-std::uint16_t bswap(std::uint16_t u) { return __builtin_bswap16(u); }
-std::uint32_t bswap(std::uint32_t u) { return __builtin_bswap32(u); }
-std::uint64_t bswap(std::uint64_t u) { return __builtin_bswap64(u); }
+/// `u` with its bytes reversed (U: a 4- or 8-byte unsigned integer).
+template <class U>
+U bswap(U u) {
+  if constexpr (sizeof(U) == 4)
+    return __builtin_bswap32(u);
+  else
+    return __builtin_bswap64(u);
+}
 
 template <class T>
 T load_le(const unsigned char* p) {
@@ -337,222 +343,6 @@ SurfaceMesh read_stl_ascii(const std::string& path, std::string_view data) {
 // PLY
 // ---------------------------------------------------------------------------------------------
 
-enum class PlyType : std::uint8_t { i8, u8, i16, u16, i32, u32, f32, f64 };
-
-bool parse_ply_type(std::string_view s, PlyType& t) {
-  struct Name {
-    std::string_view name;
-    PlyType type;
-  };
-  static constexpr Name kNames[] = {
-      {"char", PlyType::i8},     {"int8", PlyType::i8},     {"uchar", PlyType::u8},
-      {"uint8", PlyType::u8},    {"short", PlyType::i16},   {"int16", PlyType::i16},
-      {"ushort", PlyType::u16},  {"uint16", PlyType::u16},  {"int", PlyType::i32},
-      {"int32", PlyType::i32},   {"uint", PlyType::u32},    {"uint32", PlyType::u32},
-      {"float", PlyType::f32},   {"float32", PlyType::f32}, {"double", PlyType::f64},
-      {"float64", PlyType::f64},
-  };
-  for (const Name& n : kNames)
-    if (n.name == s) {
-      t = n.type;
-      return true;
-    }
-  return false;
-}
-
-std::size_t ply_size(PlyType t) {
-  switch (t) {
-    case PlyType::i8:
-    case PlyType::u8:
-      return 1;
-    case PlyType::i16:
-    case PlyType::u16:
-      return 2;
-    case PlyType::i32:
-    case PlyType::u32:
-    case PlyType::f32:
-      return 4;
-    case PlyType::f64:
-      return 8;
-  }
-  return 0;
-}
-
-bool ply_is_integer(PlyType t) { return t != PlyType::f32 && t != PlyType::f64; }
-
-enum class PlyFormat { ascii, binary_le, binary_be };
-
-struct PlyProperty {
-  std::string name;
-  PlyType type = PlyType::f32;       ///< scalar type, or the item type of a list
-  bool is_list = false;
-  PlyType count_type = PlyType::u8;  ///< lists only
-  int role = -1;                     ///< vertex: 0/1/2 = x/y/z; face: 3 = the index list
-};
-
-struct PlyElement {
-  std::string name;
-  std::uint64_t count = 0;
-  std::uint64_t line = 0;
-  std::vector<PlyProperty> props;
-  std::size_t min_binary_size() const {
-    std::size_t s = 0;
-    for (const PlyProperty& p : props) s += ply_size(p.is_list ? p.count_type : p.type);
-    return s;
-  }
-};
-
-struct PlyHeader {
-  PlyFormat format = PlyFormat::ascii;
-  std::vector<PlyElement> elements;
-  std::size_t data_offset = 0;
-  std::uint64_t data_first_line = 0;
-};
-
-PlyHeader parse_ply_header(const std::string& path, std::string_view data) {
-  PlyHeader h;
-  bool have_format = false;
-  std::size_t pos = 0;
-  std::uint64_t ln = 0;
-  std::vector<std::string_view> tok;
-  for (;;) {
-    if (pos >= data.size())
-      throw InputError(path, ln, "PLY header has no 'end_header' line");
-    const std::size_t nl = data.find('\n', pos);
-    std::string_view line = data.substr(pos, nl == std::string_view::npos ? data.size() - pos : nl - pos);
-    pos = nl == std::string_view::npos ? data.size() : nl + 1;
-    ++ln;
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    if (ln == 1) {
-      if (line != "ply") throw InputError(path, 1, "not a PLY file: the first line must be 'ply'");
-      continue;
-    }
-    tok.clear();
-    for (std::size_t i = 0; i < line.size();) {
-      while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
-      const std::size_t s = i;
-      while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
-      if (i > s) tok.push_back(line.substr(s, i - s));
-    }
-    if (tok.empty()) continue;
-    auto bad = [&](const std::string& what) {
-      return InputError(path, ln, "bad PLY header line " + quote(line) + ": " + what);
-    };
-    const std::string_view key = tok[0];
-    if (key == "comment" || key == "obj_info") continue;
-    if (key == "end_header") break;
-    if (key == "format") {
-      if (have_format) throw bad("duplicate 'format' line");
-      if (tok.size() != 3) throw bad("expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
-      if (tok[1] == "ascii")
-        h.format = PlyFormat::ascii;
-      else if (tok[1] == "binary_little_endian")
-        h.format = PlyFormat::binary_le;
-      else if (tok[1] == "binary_big_endian")
-        h.format = PlyFormat::binary_be;
-      else
-        throw bad("unknown format " + quote(tok[1]));
-      if (tok[2] != "1.0") throw bad("unsupported PLY version " + quote(tok[2]));
-      have_format = true;
-    } else if (key == "element") {
-      PlyElement e;
-      if (tok.size() != 3 || !parse_integer(tok[2], e.count))
-        throw bad("expected 'element <name> <count>' with a non-negative count");
-      e.name = tok[1];
-      e.line = ln;
-      for (const PlyElement& o : h.elements)
-        if (o.name == e.name) throw bad("duplicate element " + quote(e.name));
-      h.elements.push_back(std::move(e));
-    } else if (key == "property") {
-      if (h.elements.empty()) throw bad("property declared before any element");
-      PlyProperty p;
-      if (tok.size() == 5 && tok[1] == "list") {
-        p.is_list = true;
-        if (!parse_ply_type(tok[2], p.count_type) || !ply_is_integer(p.count_type))
-          throw bad("list count type " + quote(tok[2]) + " is not an integer type");
-        if (!parse_ply_type(tok[3], p.type)) throw bad("unknown type " + quote(tok[3]));
-        p.name = tok[4];
-      } else if (tok.size() == 3) {
-        if (!parse_ply_type(tok[1], p.type)) throw bad("unknown type " + quote(tok[1]));
-        p.name = tok[2];
-      } else {
-        throw bad("expected 'property <type> <name>' or 'property list <type> <type> <name>'");
-      }
-      PlyElement& e = h.elements.back();
-      for (const PlyProperty& q : e.props)
-        if (q.name == p.name) throw bad("duplicate property " + quote(p.name));
-      if (e.name == "vertex" && (p.name == "x" || p.name == "y" || p.name == "z")) {
-        if (p.is_list) throw bad("vertex coordinate " + quote(p.name) + " must be a scalar");
-        p.role = p.name[0] - 'x';
-      }
-      if (e.name == "face" && (p.name == "vertex_indices" || p.name == "vertex_index")) {
-        if (!p.is_list) throw bad("face property " + quote(p.name) + " must be a list");
-        if (!ply_is_integer(p.type)) throw bad("vertex indices must have an integer type");
-        for (const PlyProperty& q : e.props)
-          if (q.role == 3) throw bad("two vertex index lists in 'face'");
-        p.role = 3;
-      }
-      e.props.push_back(std::move(p));
-    } else {
-      throw bad("unknown keyword " + quote(key));
-    }
-  }
-  if (!have_format) throw InputError(path, 0, "PLY header has no 'format' line");
-  h.data_offset = pos;
-  h.data_first_line = ln + 1;
-  return h;
-}
-
-template <class U>
-U load_raw(const unsigned char* p, bool swap) {
-  U u;
-  std::memcpy(&u, p, sizeof u);
-  if (swap) u = bswap(u);
-  return u;
-}
-
-double load_ply_double(const unsigned char* p, PlyType t, bool swap) {
-  switch (t) {
-    case PlyType::i8:
-      return std::int8_t(*p);
-    case PlyType::u8:
-      return *p;
-    case PlyType::i16:
-      return std::int16_t(load_raw<std::uint16_t>(p, swap));
-    case PlyType::u16:
-      return load_raw<std::uint16_t>(p, swap);
-    case PlyType::i32:
-      return std::int32_t(load_raw<std::uint32_t>(p, swap));
-    case PlyType::u32:
-      return load_raw<std::uint32_t>(p, swap);
-    case PlyType::f32:
-      return std::bit_cast<float>(load_raw<std::uint32_t>(p, swap));
-    case PlyType::f64:
-      return std::bit_cast<double>(load_raw<std::uint64_t>(p, swap));
-  }
-  return 0;
-}
-
-/// An integer item (index or list length) as int64; exact for every integer PLY type.
-std::int64_t load_ply_int(const unsigned char* p, PlyType t, bool swap) {
-  switch (t) {
-    case PlyType::i8:
-      return std::int8_t(*p);
-    case PlyType::u8:
-      return *p;
-    case PlyType::i16:
-      return std::int16_t(load_raw<std::uint16_t>(p, swap));
-    case PlyType::u16:
-      return load_raw<std::uint16_t>(p, swap);
-    case PlyType::i32:
-      return std::int32_t(load_raw<std::uint32_t>(p, swap));
-    case PlyType::u32:
-      return load_raw<std::uint32_t>(p, swap);
-    default:
-      return -1;
-  }
-}
-
 /// Collects faces (file vertex indices) and fan-triangulates them into `tris`.
 struct FaceSink {
   const std::string& path;
@@ -601,7 +391,7 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
                        std::string("'vertex' element has no '") + char('x' + c) + "' property");
   if (!face_el) throw InputError(path, 0, "PLY file has no 'face' element (a point cloud, not a surface)");
   if (std::none_of(face_el->props.begin(), face_el->props.end(),
-                   [](const PlyProperty& p) { return p.role == 3; }))
+                   [](const PlyProperty& p) { return p.role == kPlyFaceIndices; }))
     throw InputError(path, face_el->line,
                      "'face' element has no 'vertex_indices' (or 'vertex_index') list property");
   if (vert_el->count > 0xFFFFFFFFull)
@@ -610,11 +400,10 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
   const std::size_t nbytes = data.size() - h.data_offset;
   // Counts the file cannot hold are rejected before anything is allocated from them.
   for (const PlyElement& e : h.elements) {
-    const std::uint64_t min_size = h.format == PlyFormat::ascii ? 2 * e.props.size() : e.min_binary_size();
-    if (min_size > 0 && e.count > (nbytes + 1) / min_size)
+    if (!ply_count_fits(e, h.format, nbytes))
       throw InputError(path, e.line,
                        "element '" + e.name + "' declares " + std::to_string(e.count) +
-                           " records of at least " + std::to_string(min_size) +
+                           " records of at least " + std::to_string(ply_min_record_size(e, h.format)) +
                            " bytes, but the data section has only " + std::to_string(nbytes) +
                            " bytes (truncated or corrupt file)");
   }
@@ -677,7 +466,7 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
           if (n > tok.remaining()) throw eof();
           for (std::uint64_t k = 0; k < n; ++k) {
             t = value();
-            if (is_face && p.role == 3) {
+            if (is_face && p.role == kPlyFaceIndices) {
               std::int64_t v;
               if (!parse_integer(t, v))
                 throw InputError(path, line, "face " + std::to_string(i) + " (0-based): vertex index " +
@@ -701,7 +490,7 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
     if (!tok.next().empty())
       throw InputError(path, tok.line(), "unexpected data after the last declared element");
   } else {
-    const bool swap = (h.format == PlyFormat::binary_le) != (std::endian::native == std::endian::little);
+    const bool swap = ply_needs_swap(h.format);
     const auto* base = reinterpret_cast<const unsigned char*>(data.data());
     const unsigned char* p = base + h.data_offset;
     const unsigned char* end = base + data.size();
@@ -716,34 +505,27 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
                                 " (0-based, byte offset " + std::to_string(rec_offset) + ") of " +
                                 std::to_string(e.count) + " runs past the end of the file");
         };
-        for (const PlyProperty& prop : e.props) {
-          if (!prop.is_list) {
-            const std::size_t size = ply_size(prop.type);
-            if (std::size_t(end - p) < size) throw truncated();
-            if (is_vert && prop.role >= 0) {
-              const double v = load_ply_double(p, prop.type, swap);
+        const PlyProperty* fault = nullptr;
+        const PlyRecordEnd status = walk_ply_binary_record(
+            e, p, end, swap, fault,
+            [&](const PlyProperty& prop, const unsigned char* bytes) {
+              if (!is_vert || prop.role < 0) return;
+              const double v = load_ply_double(bytes, prop.type, swap);
               if (!std::isfinite(v))
                 throw InputError(path, 0, "vertex " + std::to_string(i) + " (0-based, byte offset " +
-                                              std::to_string(p - base) + "): non-finite coordinate " +
+                                              std::to_string(bytes - base) + "): non-finite coordinate " +
                                               prop.name);
               raw[3 * i + std::size_t(prop.role)] = v;
-            }
-            p += size;
-            continue;
-          }
-          const std::size_t csize = ply_size(prop.count_type);
-          if (std::size_t(end - p) < csize) throw truncated();
-          const std::int64_t n = load_ply_int(p, prop.count_type, swap);
-          if (n < 0)
-            throw InputError(path, 0, "element '" + e.name + "' record " + std::to_string(i) +
-                                          " (0-based" + where() + "): negative list length");
-          p += csize;
-          const std::size_t isize = ply_size(prop.type);
-          if (std::uint64_t(n) > std::size_t(end - p) / isize) throw truncated();
-          if (is_face && prop.role == 3)
-            for (std::int64_t k = 0; k < n; ++k) sink.index(load_ply_int(p + k * isize, prop.type, swap), i, 0, where);
-          p += std::size_t(n) * isize;
-        }
+            },
+            [&](const PlyProperty& prop, std::size_t n, const unsigned char* items) {
+              if (!is_face || prop.role != kPlyFaceIndices) return;
+              const std::size_t isize = ply_size(prop.type);
+              for (std::size_t k = 0; k < n; ++k) sink.index(load_ply_int(items + k * isize, prop.type, swap), i, 0, where);
+            });
+        if (status == PlyRecordEnd::truncated) throw truncated();
+        if (status == PlyRecordEnd::negative_list_length)
+          throw InputError(path, 0, "element '" + e.name + "' record " + std::to_string(i) +
+                                        " (0-based" + where() + "): negative list length");
         if (is_face) sink.finish(i, 0, where);
       }
     }

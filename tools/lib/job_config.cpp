@@ -1,12 +1,6 @@
 // kdmesh — batch files: YAML -> MeshJob list, every error naming file:line and key.
 // yaml-cpp stays in this file.
 // SPDX-License-Identifier: AGPL-3.0-or-later
-// GCC 12 at -O3 warns falsely (-Wrestrict, GCC bug 105329) inside libstdc++'s string
-// concatenation when it compiles InputError's constructor (`":" + std::to_string(line)`) out of
-// line in this file; the pragma must precede <string> to reach that location.
-#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ == 12
-#pragma GCC diagnostic ignored "-Wrestrict"
-#endif
 #include "tools/lib/job_config.h"
 
 #include <yaml-cpp/yaml.h>
