@@ -33,7 +33,7 @@ declare -A LIBS=(
 # here as they land).
 [ -f tests/fuzz/fuzz_stl.cpp ] && SOURCES[stl]="io/surface_io.cpp" && LIBS[stl]=""
 [ -f tests/fuzz/fuzz_ply_surface.cpp ] && SOURCES[ply_surface]="io/surface_io.cpp" && LIBS[ply_surface]=""
-[ -f tests/fuzz/fuzz_config.cpp ] && SOURCES[config]="tools/lib/job_config.cpp" && LIBS[config]="-lyaml-cpp"
+[ -f tests/fuzz/fuzz_config.cpp ] && SOURCES[config]="tools/lib/job_config.cpp mesher/order.cpp mesher/order_kd.cpp mesher/order_kd_local.cpp mesher/order_hilbert.cpp" && LIBS[config]="-lyaml-cpp -lpthread"
 
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=($(printf '%s\n' "${!SOURCES[@]}" | sort))
