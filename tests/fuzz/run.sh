@@ -16,24 +16,29 @@ mkdir -p "$OUT"
 CXX="${FUZZ_CXX:-clang++}"
 FLAGS=(-std=c++20 -O1 -g -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefined
        -fno-sanitize-recover=undefined -I. -DKDMESH_FUZZ)
-CORE=(core/atomic_file.cpp core/point_set.cpp)
+# Sources by glob, so that a new file in core/ or io/ cannot break the link (io/vtu_writer.cpp
+# is left out: it needs VTK, which no reader uses).
+CORE=(core/*.cpp)
+IO_READERS="$(ls io/*.cpp | grep -v vtu_writer | tr '\n' ' ')"
+IO_POINTS="$IO_READERS"
+IO_SURFACE="$IO_READERS"
+ORDERS="$(ls mesher/order*.cpp | tr '\n' ' ')"
 
 # target : sources (besides the target file and core) : libraries
 declare -A SOURCES=(
-  [xyz]="io/points_io.cpp"
-  [node]="io/points_io.cpp"
-  [ply_points]="io/points_io.cpp"
+  [xyz]="$IO_POINTS"
+  [node]="$IO_POINTS"
+  [ply_points]="$IO_POINTS"
 )
 declare -A LIBS=(
   [xyz]=""
   [node]=""
   [ply_points]=""
 )
-# Targets whose sources exist in this tree (surface readers and the YAML loader are added
-# here as they land).
-[ -f tests/fuzz/fuzz_stl.cpp ] && SOURCES[stl]="io/surface_io.cpp" && LIBS[stl]=""
-[ -f tests/fuzz/fuzz_ply_surface.cpp ] && SOURCES[ply_surface]="io/surface_io.cpp" && LIBS[ply_surface]=""
-[ -f tests/fuzz/fuzz_config.cpp ] && SOURCES[config]="tools/lib/job_config.cpp mesher/order.cpp mesher/order_kd.cpp mesher/order_kd_local.cpp mesher/order_hilbert.cpp" && LIBS[config]="-lyaml-cpp -lpthread"
+# The surface-reader and YAML-loader targets (listed when their harness file exists).
+[ -f tests/fuzz/fuzz_stl.cpp ] && SOURCES[stl]="$IO_SURFACE" && LIBS[stl]=""
+[ -f tests/fuzz/fuzz_ply_surface.cpp ] && SOURCES[ply_surface]="$IO_SURFACE" && LIBS[ply_surface]=""
+[ -f tests/fuzz/fuzz_config.cpp ] && SOURCES[config]="tools/lib/job_config.cpp $ORDERS" && LIBS[config]="-lyaml-cpp -lpthread"
 
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=($(printf '%s\n' "${!SOURCES[@]}" | sort))
