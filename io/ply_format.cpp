@@ -9,21 +9,13 @@
 #include <utility>
 
 #include "core/error.h"
+#include "io/file_io.h"
 
 namespace kdmesh {
 
 namespace {
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
-/// A token quoted for an error message: shortened if long, unprintable bytes shown as '?'.
-std::string quote(std::string_view tok) {
-  constexpr std::size_t kMax = 40;
-  std::string s(tok.substr(0, kMax));
-  for (char& c : s)
-    if (!std::isprint(static_cast<unsigned char>(c))) c = '?';
-  return "'" + s + (tok.size() > kMax ? "...'" : "'");
-}
 
 /// Parses a whole token as a non-negative integer (a leading '+' allowed).
 bool parse_count(std::string_view tok, std::uint64_t& v) {
@@ -130,7 +122,7 @@ PlyHeader parse_ply_header(const std::string& path, std::string_view data) {
     if (tok.empty()) continue;
     const std::string_view key = tok[0];
     auto bad = [&](const std::string& what) {
-      return InputError(path, ln, "bad PLY header line " + quote(line) + ": " + what);
+      return InputError(path, ln, "bad PLY header line " + quote_token_printable(line) + ": " + what);
     };
     if (key == "comment" || key == "obj_info") continue;
     if (key == "end_header") {
@@ -148,8 +140,8 @@ PlyHeader parse_ply_header(const std::string& path, std::string_view data) {
       else if (tok[1] == "binary_big_endian")
         h.format = PlyFormat::binary_be;
       else
-        throw bad("unknown format " + quote(tok[1]));
-      if (tok[2] != "1.0") throw bad("unsupported PLY version " + quote(tok[2]) + " (only 1.0)");
+        throw bad("unknown format " + quote_token_printable(tok[1]));
+      if (tok[2] != "1.0") throw bad("unsupported PLY version " + quote_token_printable(tok[2]) + " (only 1.0)");
       have_format = true;
     } else if (key == "element") {
       PlyElement e;
@@ -158,7 +150,7 @@ PlyHeader parse_ply_header(const std::string& path, std::string_view data) {
       e.name = tok[1];
       e.line = ln;
       for (const PlyElement& o : h.elements)
-        if (o.name == e.name) throw bad("duplicate element " + quote(e.name));
+        if (o.name == e.name) throw bad("duplicate element " + quote_token_printable(e.name));
       h.elements.push_back(std::move(e));
     } else if (key == "property") {
       if (h.elements.empty()) throw bad("property declared before any element");
@@ -166,24 +158,24 @@ PlyHeader parse_ply_header(const std::string& path, std::string_view data) {
       if (tok.size() == 5 && tok[1] == "list") {
         p.is_list = true;
         if (!parse_ply_type(tok[2], p.count_type) || !ply_is_integer(p.count_type))
-          throw bad("list count type " + quote(tok[2]) + " is not an integer type");
-        if (!parse_ply_type(tok[3], p.type)) throw bad("unknown type " + quote(tok[3]));
+          throw bad("list count type " + quote_token_printable(tok[2]) + " is not an integer type");
+        if (!parse_ply_type(tok[3], p.type)) throw bad("unknown type " + quote_token_printable(tok[3]));
         p.name = tok[4];
       } else if (tok.size() == 3) {
-        if (!parse_ply_type(tok[1], p.type)) throw bad("unknown type " + quote(tok[1]));
+        if (!parse_ply_type(tok[1], p.type)) throw bad("unknown type " + quote_token_printable(tok[1]));
         p.name = tok[2];
       } else {
         throw bad("expected 'property <type> <name>' or 'property list <type> <type> <name>'");
       }
       PlyElement& e = h.elements.back();
       for (const PlyProperty& q : e.props)
-        if (q.name == p.name) throw bad("duplicate property " + quote(p.name));
+        if (q.name == p.name) throw bad("duplicate property " + quote_token_printable(p.name));
       if (e.name == "vertex" && (p.name == "x" || p.name == "y" || p.name == "z")) {
-        if (p.is_list) throw bad("vertex coordinate " + quote(p.name) + " must be a scalar");
+        if (p.is_list) throw bad("vertex coordinate " + quote_token_printable(p.name) + " must be a scalar");
         p.role = p.name[0] - 'x';
       }
       if (e.name == "face" && (p.name == "vertex_indices" || p.name == "vertex_index")) {
-        if (!p.is_list) throw bad("face property " + quote(p.name) + " must be a list");
+        if (!p.is_list) throw bad("face property " + quote_token_printable(p.name) + " must be a list");
         if (!ply_is_integer(p.type)) throw bad("vertex indices must have an integer type");
         for (const PlyProperty& q : e.props)
           if (q.role == kPlyFaceIndices) throw bad("two vertex index lists in 'face'");
@@ -191,7 +183,7 @@ PlyHeader parse_ply_header(const std::string& path, std::string_view data) {
       }
       e.props.push_back(std::move(p));
     } else {
-      throw bad("unknown keyword " + quote(key));
+      throw bad("unknown keyword " + quote_token_printable(key));
     }
   }
   if (!have_format) throw InputError(path, 0, "PLY header has no 'format' line");

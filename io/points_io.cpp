@@ -8,14 +8,9 @@
 // the 1-based line for text data, 0 with a record index for binary data.
 #include "io/points_io.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -27,6 +22,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "io/file_io.h"
 #include "io/ply_format.h"
 
 namespace kdmesh {
@@ -36,42 +32,6 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Whole-file input and line / token scanning
 // ---------------------------------------------------------------------------------------------
-
-/// Closes a file descriptor on scope exit.
-struct FdGuard {
-  int fd;
-  ~FdGuard() {
-    if (fd >= 0) ::close(fd);
-  }
-};
-
-/// The complete contents of `path`. Throws InputError (with strerror) if it cannot be read.
-std::string read_whole_file(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw InputError(path, 0, std::string("cannot open: ") + std::strerror(errno));
-  FdGuard guard{fd};
-  struct stat st {};
-  if (::fstat(fd, &st) != 0)
-    throw InputError(path, 0, std::string("cannot stat: ") + std::strerror(errno));
-  if (S_ISDIR(st.st_mode)) throw InputError(path, 0, "cannot read: is a directory");
-
-  // Regular files: one buffer of the right size (+1 so the final read sees EOF without growing).
-  // Pipes and other special files report no size: grow geometrically.
-  std::string data(S_ISREG(st.st_mode) ? std::size_t(st.st_size) + 1 : std::size_t(1) << 16, '\0');
-  std::size_t used = 0;
-  for (;;) {
-    if (used == data.size()) data.resize(2 * data.size());
-    const ssize_t n = ::read(fd, data.data() + used, data.size() - used);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      throw InputError(path, 0, std::string("cannot read: ") + std::strerror(errno));
-    }
-    if (n == 0) break;
-    used += std::size_t(n);
-  }
-  data.resize(used);
-  return data;
-}
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
@@ -434,21 +394,8 @@ void write_xyz(const PointSet& points, const std::string& path) {
                        " has a non-finite coordinate");
 
   AtomicFile file(path);
-  const int fd = ::open(file.temp_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-  if (fd < 0) throw OutputError(path, std::string("cannot create: ") + std::strerror(errno));
-  FdGuard guard{fd};
-
-  auto write_all = [&](const char* p, std::size_t n) {
-    while (n > 0) {
-      const ssize_t w = ::write(fd, p, n);
-      if (w < 0) {
-        if (errno == EINTR) continue;
-        throw OutputError(path, std::string("write failed: ") + std::strerror(errno));
-      }
-      p += w;
-      n -= std::size_t(w);
-    }
-  };
+  FileWriter writer(file.temp_path(), path);
+  auto write_all = [&](const char* p, std::size_t n) { writer.write(p, n); };
 
   // Formatted in 4 MiB chunks: as fast as a single buffer, bounded memory for huge sets.
   constexpr std::size_t kChunk = std::size_t(4) << 20;
@@ -470,9 +417,7 @@ void write_xyz(const PointSet& points, const std::string& path) {
     }
   }
   write_all(begin, std::size_t(out - begin));
-  guard.fd = -1;
-  if (::close(fd) != 0)
-    throw OutputError(path, std::string("close failed: ") + std::strerror(errno));
+  writer.close();
   file.commit();
 }
 

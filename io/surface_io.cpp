@@ -23,14 +23,9 @@
 // point, through an open-addressing hash table (O(n)); facets keep file order and orientation.
 #include "io/surface_io.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <bit>
 #include <cctype>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -40,8 +35,8 @@
 #include <string_view>
 #include <vector>
 
-#include "core/atomic_file.h"
 #include "core/error.h"
+#include "io/file_io.h"
 #include "io/ply_format.h"
 
 namespace kdmesh {
@@ -52,44 +47,11 @@ namespace {
 // File input
 // ---------------------------------------------------------------------------------------------
 
-struct FdGuard {
-  int fd;
-  ~FdGuard() {
-    if (fd >= 0) ::close(fd);
-  }
-};
-
-std::string read_whole_file(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw InputError(path, 0, std::string("cannot open: ") + std::strerror(errno));
-  FdGuard guard{fd};
-  struct stat st {};
-  if (::fstat(fd, &st) != 0)
-    throw InputError(path, 0, std::string("cannot stat: ") + std::strerror(errno));
-  if (S_ISDIR(st.st_mode)) throw InputError(path, 0, "cannot read: is a directory");
-  std::string data(S_ISREG(st.st_mode) ? std::size_t(st.st_size) + 1 : std::size_t(1) << 16, '\0');
-  std::size_t used = 0;
-  for (;;) {
-    if (used == data.size()) data.resize(2 * data.size());
-    const ssize_t n = ::read(fd, data.data() + used, data.size() - used);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      throw InputError(path, 0, std::string("cannot read: ") + std::strerror(errno));
-    }
-    if (n == 0) break;
-    used += std::size_t(n);
-  }
-  data.resize(used);
+/// The file's bytes; an empty file is an error for every surface format.
+std::string read_surface_file(const std::string& path) {
+  std::string data = read_whole_file(path);
   if (data.empty()) throw InputError(path, 0, "empty file");
   return data;
-}
-
-std::string quote(std::string_view tok) {
-  constexpr std::size_t kMax = 40;
-  std::string s(tok.substr(0, kMax));
-  for (char& c : s)
-    if (!std::isprint(static_cast<unsigned char>(c))) c = '?';
-  return "'" + s + (tok.size() > kMax ? "...'" : "'");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -277,7 +239,7 @@ SurfaceMesh read_stl_ascii(const std::string& path, std::string_view data) {
     if (!iequals(t, want))
       throw InputError(path, tok.line(),
                        "expected '" + std::string(want) + "' " + context + ", found " +
-                           (t.empty() ? std::string("end of file") : quote(t)));
+                           (t.empty() ? std::string("end of file") : quote_token_printable(t)));
   };
 
   std::string_view t = tok.next();
@@ -294,13 +256,13 @@ SurfaceMesh read_stl_ascii(const std::string& path, std::string_view data) {
       t = tok.next();
       if (t.empty()) break;
       if (!iequals(t, "solid"))
-        throw InputError(path, tok.line(), "expected 'solid' or end of file after 'endsolid', found " + quote(t));
+        throw InputError(path, tok.line(), "expected 'solid' or end of file after 'endsolid', found " + quote_token_printable(t));
       tok.skip_line();
       continue;
     }
     if (!iequals(t, "facet"))
       throw InputError(path, tok.line(),
-                       "expected 'facet' or 'endsolid', found " + quote(t));
+                       "expected 'facet' or 'endsolid', found " + quote_token_printable(t));
     const std::string where = "in facet " + std::to_string(facet) + " (0-based)";
     expect("normal", where.c_str());
     for (int k = 0; k < 3; ++k) {  // the normal is recomputed downstream; only its syntax matters
@@ -308,7 +270,7 @@ SurfaceMesh read_stl_ascii(const std::string& path, std::string_view data) {
       const std::string_view n = tok.next();
       if (!parse_double(n, v))
         throw InputError(path, tok.line(), "facet " + std::to_string(facet) + " (0-based): normal component " +
-                                               (n.empty() ? std::string("missing") : quote(n)) + " is not a number");
+                                               (n.empty() ? std::string("missing") : quote_token_printable(n)) + " is not a number");
     }
     expect("outer", where.c_str());
     expect("loop", where.c_str());
@@ -322,11 +284,11 @@ SurfaceMesh read_stl_ascii(const std::string& path, std::string_view data) {
           throw InputError(path, tok.line(),
                            "facet " + std::to_string(facet) + " (0-based), corner " +
                                std::to_string(k) + ": coordinate " +
-                               (n.empty() ? std::string("missing") : quote(n)) + " is not a number");
+                               (n.empty() ? std::string("missing") : quote_token_printable(n)) + " is not a number");
         if (!std::isfinite(c[j]))
           throw InputError(path, tok.line(),
                            "facet " + std::to_string(facet) + " (0-based), corner " +
-                               std::to_string(k) + ": non-finite coordinate " + quote(n));
+                               std::to_string(k) + ": non-finite coordinate " + quote_token_printable(n));
       }
       ids[k] = weld.add(c[0], c[1], c[2]);
     }
@@ -449,12 +411,12 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
             double v;
             if (!parse_double(t, v))
               throw InputError(path, line, "element '" + e.name + "' record " + std::to_string(i) +
-                                               ": property '" + p.name + "' value " + quote(t) +
+                                               ": property '" + p.name + "' value " + quote_token_printable(t) +
                                                " is not a number");
             if (is_vert && p.role >= 0) {
               if (!std::isfinite(v))
                 throw InputError(path, line, "vertex " + std::to_string(i) +
-                                                 " (0-based): non-finite coordinate " + p.name + " = " + quote(t));
+                                                 " (0-based): non-finite coordinate " + p.name + " = " + quote_token_printable(t));
               raw[3 * i + std::size_t(p.role)] = v;
             }
             continue;
@@ -462,7 +424,7 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
           std::uint64_t n;
           if (!parse_integer(t, n))
             throw InputError(path, line, "element '" + e.name + "' record " + std::to_string(i) +
-                                             ": list length " + quote(t) + " is not a non-negative integer");
+                                             ": list length " + quote_token_printable(t) + " is not a non-negative integer");
           if (n > tok.remaining()) throw eof();
           for (std::uint64_t k = 0; k < n; ++k) {
             t = value();
@@ -470,13 +432,13 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
               std::int64_t v;
               if (!parse_integer(t, v))
                 throw InputError(path, line, "face " + std::to_string(i) + " (0-based): vertex index " +
-                                                 quote(t) + " is not an integer");
+                                                 quote_token_printable(t) + " is not an integer");
               sink.index(v, i, line, where);
             } else {
               double v;
               if (!parse_double(t, v))
                 throw InputError(path, line, "element '" + e.name + "' record " + std::to_string(i) +
-                                                 ": list item " + quote(t) + " is not a number");
+                                                 ": list item " + quote_token_printable(t) + " is not a number");
             }
           }
         }
@@ -560,28 +522,6 @@ void check_writable(const SurfaceMesh& mesh, const char* who) {
   if (mesh.num_tris() > 0xFFFFFFFFull) throw UsageError(std::string(who) + ": more than 2^32-1 facets");
 }
 
-/// Writes `bytes` to a temporary file and renames it over `path`.
-void write_atomic(const std::string& path, const std::string& bytes) {
-  AtomicFile file(path);
-  const int fd = ::open(file.temp_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-  if (fd < 0) throw OutputError(path, std::string("cannot create: ") + std::strerror(errno));
-  FdGuard guard{fd};
-  const char* p = bytes.data();
-  std::size_t n = bytes.size();
-  while (n > 0) {
-    const ssize_t w = ::write(fd, p, n);
-    if (w < 0) {
-      if (errno == EINTR) continue;
-      throw OutputError(path, std::string("write failed: ") + std::strerror(errno));
-    }
-    p += w;
-    n -= std::size_t(w);
-  }
-  guard.fd = -1;
-  if (::close(fd) != 0) throw OutputError(path, std::string("close failed: ") + std::strerror(errno));
-  file.commit();
-}
-
 template <class T>
 void put_le(std::string& out, T v) {
   using U = std::conditional_t<sizeof(T) == 1, std::uint8_t,
@@ -631,11 +571,11 @@ SurfaceMesh read_surface(const std::string& path) {
                  [](unsigned char c) { return char(std::tolower(c)); });
   if (ext == ".stl") return read_stl(path);
   if (ext == ".ply") return read_ply(path);
-  throw InputError(path, 0, "unknown surface file extension " + quote(ext) + " (supported: .stl, .ply)");
+  throw InputError(path, 0, "unknown surface file extension " + quote_token_printable(ext) + " (supported: .stl, .ply)");
 }
 
 SurfaceMesh read_stl(const std::string& path) {
-  const std::string data = read_whole_file(path);
+  const std::string data = read_surface_file(path);
   // The size rule alone decides binary: 84 + 50 * count == file size.
   if (data.size() >= 84) {
     const std::uint32_t count =
@@ -660,7 +600,7 @@ SurfaceMesh read_stl(const std::string& path) {
 }
 
 SurfaceMesh read_ply(const std::string& path) {
-  const std::string data = read_whole_file(path);
+  const std::string data = read_surface_file(path);
   return read_ply_data(path, data);
 }
 
@@ -705,7 +645,7 @@ void write_stl(const SurfaceMesh& mesh, const std::string& path, bool binary) {
     }
     out += "endsolid kdmesh\n";
   }
-  write_atomic(path, out);
+  write_file_atomically(path, out);
 }
 
 void write_ply(const SurfaceMesh& mesh, const std::string& path, bool binary) {
@@ -735,7 +675,7 @@ void write_ply(const SurfaceMesh& mesh, const std::string& path, bool binary) {
       out += "3 " + std::to_string(mesh.tri(f)[0]) + " " + std::to_string(mesh.tri(f)[1]) + " " +
              std::to_string(mesh.tri(f)[2]) + "\n";
   }
-  write_atomic(path, out);
+  write_file_atomically(path, out);
 }
 
 }  // namespace kdmesh

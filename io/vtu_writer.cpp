@@ -21,14 +21,11 @@
 #include <vtkXMLUnstructuredGridWriter.h>
 
 #include <algorithm>
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
 #include <string>
 #include <vector>
 
-#include "core/atomic_file.h"
 #include "core/error.h"
+#include "io/file_io.h"
 
 namespace kdmesh {
 
@@ -156,13 +153,7 @@ void write_vtu(const TetMesh& mesh, const std::string& path) {
                                      : errors->messages));
   const std::string bytes = writer->GetOutputString();
 
-  AtomicFile file(path);
-  std::FILE* f = std::fopen(file.temp_path().c_str(), "wb");
-  if (!f) throw OutputError(path, std::string("cannot create: ") + std::strerror(errno));
-  int error = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size() ? 0 : errno;
-  if (std::fclose(f) != 0 && error == 0) error = errno;
-  if (error != 0) throw OutputError(path, std::string("write failed: ") + std::strerror(error));
-  file.commit();
+  write_file_atomically(path, bytes);
 }
 
 }  // namespace kdmesh
