@@ -70,7 +70,7 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const PreparedSurface& surfa
       const std::uint32_t* v = &mesh.tets[4 * t];
       const double *a = pts.p(v[0]), *bb = pts.p(v[1]), *cc = pts.p(v[2]), *d = pts.p(v[3]);
       if (pred::orient3d(a, bb, cc, d) <= 0) bad_orient[t] = 1;
-      else if (tet_quality(a, bb, cc, d).volume_length < 1e-9) bad_orient[t] = 2;  // zero volume
+      else if (volume_length(a, bb, cc, d) < kZeroVolumeLength) bad_orient[t] = 2;  // zero volume
       double m[3];
       for (int k = 0; k < 3; ++k) m[k] = (a[k] + bb[k] + cc[k] + d[k]) / 4;
       if (query.side(m) != 1) outside[t] = 1;

@@ -36,6 +36,19 @@ void add_to(Histogram& h, double value) {
 // opposite c (a,b,d), opposite d (a,c,b). The interior dihedral angle along the edge shared
 // by faces k and l is pi - angle(n_k, n_l). For an inverted tet the same formulas give the
 // angles of its mirror image's complement; they are reported as computed (volume < 0 flags it).
+double volume_length(const double* a, const double* b, const double* c, const double* d) {
+  const double* p[4] = {a, b, c, d};
+  const double det = dot(sub(b, a), cross(sub(c, a), sub(d, a)));  // 6 V
+  double l2_sum = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j) {
+      const V3 e = sub(p[j], p[i]);
+      l2_sum += dot(e, e);
+    }
+  const double l_rms = std::sqrt(l2_sum / 6);
+  return l_rms > 0 ? std::sqrt(2.0) * det / (l_rms * l_rms * l_rms) : 0;
+}
+
 TetQuality tet_quality(const double* a, const double* b, const double* c, const double* d) {
   TetQuality q;
   const double* p[4] = {a, b, c, d};
@@ -68,16 +81,13 @@ TetQuality tet_quality(const double* a, const double* b, const double* c, const 
   q.max_dihedral = max_dih;
 
   // Edge lengths.
-  double l2_sum = 0, l2_min = std::numeric_limits<double>::infinity();
+  double l2_min = std::numeric_limits<double>::infinity();
   for (int i = 0; i < 4; ++i)
     for (int j = i + 1; j < 4; ++j) {
       const V3 e = sub(p[j], p[i]);
-      const double l2 = dot(e, e);
-      l2_sum += l2;
-      l2_min = std::min(l2_min, l2);
+      l2_min = std::min(l2_min, dot(e, e));
     }
-  const double l_rms = std::sqrt(l2_sum / 6);
-  q.volume_length = l_rms > 0 ? 6 * std::sqrt(2.0) * q.volume / (l_rms * l_rms * l_rms) : 0;
+  q.volume_length = volume_length(a, b, c, d);
 
   // Circumcentre offset from a: (|e1|^2 e2xe3 + |e2|^2 e3xe1 + |e3|^2 e1xe2) / (2 det).
   if (det == 0) {

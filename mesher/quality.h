@@ -18,6 +18,14 @@ struct TetQuality {
   double volume_length = 0;   ///< 6 sqrt(2) V / l_rms^3, 1 for the regular tet
 };
 
+/// The volume-length ratio 6 sqrt(2) V / l_rms^3 of the tet (a, b, c, d): signed (negative
+/// when inverted), 1 for the regular tet, 0 when flat. Cheap (no angles).
+double volume_length(const double* a, const double* b, const double* c, const double* d);
+
+/// A tet with |volume_length| below this is flat at rounding level: zero volume for FE use
+/// (its vertices are coplanar up to the rounding of their coordinates).
+inline constexpr double kZeroVolumeLength = 1e-9;
+
 /// Measures of the tet (a, b, c, d), each pointing to xyz.
 TetQuality tet_quality(const double* a, const double* b, const double* c, const double* d);
 

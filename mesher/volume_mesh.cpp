@@ -48,26 +48,10 @@ DelaunayResult triangulate(const NodeSet& nodes, const VolumeMeshOptions& option
   return r;
 }
 
-/// True if the tet (4 point ids at v) is flat at rounding level: its volume-length ratio
-/// 6 sqrt(2) V / l_rms^3 (1 for the regular tet) is below 1e-9.
+/// True if the tet (4 point ids at v) is flat at rounding level (mesher/quality.h).
 bool flat_at_rounding(const PointSet& pts, const std::uint32_t* v) {
-  const double* a = pts.p(v[0]);
-  const double* b = pts.p(v[1]);
-  const double* c = pts.p(v[2]);
-  const double* d = pts.p(v[3]);
-  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  const double x[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-  const double det = u[0] * (w[1] * x[2] - w[2] * x[1]) - u[1] * (w[0] * x[2] - w[2] * x[0]) +
-                     u[2] * (w[0] * x[1] - w[1] * x[0]);
-  const double* p[4] = {a, b, c, d};
-  double sum = 0;
-  for (int i = 0; i < 4; ++i)
-    for (int j = i + 1; j < 4; ++j)
-      sum += (p[i][0] - p[j][0]) * (p[i][0] - p[j][0]) + (p[i][1] - p[j][1]) * (p[i][1] - p[j][1]) +
-             (p[i][2] - p[j][2]) * (p[i][2] - p[j][2]);
-  const double lrms = std::sqrt(sum / 6);
-  return std::sqrt(2.0) * std::abs(det) < 1e-9 * lrms * lrms * lrms;  // 6 sqrt2 V = sqrt2 |det|
+  return std::abs(volume_length(pts.p(v[0]), pts.p(v[1]), pts.p(v[2]), pts.p(v[3]))) <
+         kZeroVolumeLength;
 }
 
 void centroid4(const PointSet& pts, const std::uint32_t* v, double* c) {
