@@ -21,6 +21,11 @@ class CreaseFinder {
   bool closest_crease_point(const double* q, const std::uint32_t* facets, int n, double* out,
                             std::uint32_t* facet = nullptr) const;
 
+  /// Edge j of facet f, from corner j to corner j+1: whether it is a crease, and the facet
+  /// across it (kNoFacet on a boundary or non-manifold edge).
+  bool is_crease(std::size_t f, int j) const { return crease_[3 * f + j] != 0; }
+  std::uint32_t neighbour(std::size_t f, int j) const { return neighbour_[3 * f + j]; }
+
  private:
   const SurfaceMesh* surface_;
   std::vector<std::uint32_t> neighbour_;  ///< 3 per facet: facet across edge (t[j], t[j+1]), or kNoFacet

@@ -8,10 +8,8 @@
 #include <numbers>
 #include <vector>
 
-#include <unordered_map>
-
 #include "core/rng.h"
-#include "mesher/predicates.h"
+#include "mesher/crease_points.h"
 
 namespace kdmesh {
 
@@ -31,27 +29,18 @@ std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t facet) {
 /// creases wherever no node happens to lie on them.
 void place_crease_nodes(const SurfaceMesh& surface, const SizingField& sizing,
                         const SurfaceSamplingOptions& options, SpacingGrid& grid, NodeSet& nodes) {
-  const std::size_t nf = surface.num_tris();
-  std::unordered_map<std::uint64_t, std::uint32_t> first;  // edge -> the facet seen first
-  first.reserve(3 * nf);
   struct Crease {
-    std::uint32_t a, b, facet;
+    std::uint32_t a, b, facet;  // a < b; facet: the lower id of the edge's two facets
   };
   std::vector<Crease> creases;
-  for (std::size_t f = 0; f < nf; ++f) {
-    const std::uint32_t* t = surface.tri(f);
-    for (int i = 0; i < 3; ++i) {
-      const std::uint32_t a = t[i], b = t[(i + 1) % 3], c = t[(i + 2) % 3];
-      const std::uint64_t key = a < b ? (std::uint64_t(a) << 32 | b) : (std::uint64_t(b) << 32 | a);
-      const auto [it, fresh] = first.emplace(key, std::uint32_t(f));
-      if (fresh) continue;
-      const std::uint32_t* u = surface.tri(it->second);
-      const std::uint32_t d = u[0] != a && u[0] != b ? u[0] : u[1] != a && u[1] != b ? u[1] : u[2];
-      if (pred::orient3d(surface.points.p(a), surface.points.p(b), surface.points.p(c),
-                         surface.points.p(d)) != 0)
-        creases.push_back({std::min(a, b), std::max(a, b), it->second});
+  const CreaseFinder finder(surface);
+  for (std::size_t f = 0; f < surface.num_tris(); ++f)
+    for (int j = 0; j < 3; ++j) {
+      const std::uint32_t g = finder.neighbour(f, j);
+      if (!finder.is_crease(f, j) || g == kNoFacet || g < f) continue;
+      const std::uint32_t a = surface.tri(f)[j], b = surface.tri(f)[(j + 1) % 3];
+      creases.push_back({std::min(a, b), std::max(a, b), std::uint32_t(f)});
     }
-  }
   std::sort(creases.begin(), creases.end(), [](const Crease& x, const Crease& y) {
     return x.a != y.a ? x.a < y.a : x.b < y.b;
   });
