@@ -1,27 +1,28 @@
-// Benchmark: node placement on a box [0, L]^3 (12-triangle surface, its 12 edges and 8
-// corners as features) with a uniform or graded sizing field; per-stage times and nodes/s.
-// With --fidelity it also tetrahedralizes the nodes (kd-bfs + delaunay), keeps the tets whose
-// centroid is inside, and prints the edge length / target size statistics.
+// Benchmark: node placement on a box [0, L]^3 (12-triangle surface) with a uniform or graded
+// sizing field; per-stage times and nodes/s. The surface goes through the pipeline's own
+// stages (prepare_surface, detect_sharp_edges at 30 degrees: the box's 12 edges and 8 corners).
+// With --fidelity it also meshes the nodes (mesh_volume), checks the mesh (check_volume_mesh)
+// and prints the edge length / target size statistics, overall and by kinds of end nodes.
 // Usage: bench_placement [--L 100] [--h 1] [--seed 1] [--clearance 0.8] [--fidelity]
 //                        [--graded SIZE]   (a point zone of SIZE at the box centre)
 //                        [--cylinder]      (a 64-gon prism of radius L/2, height L, instead)
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <ctime>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <numbers>
 #include <string>
 #include <vector>
 
 #include "core/timer.h"
-#include "mesher/delaunay.h"
+#include "mesher/mesh_check.h"
 #include "mesher/node_placement.h"
-#include "mesher/order.h"
 #include "mesher/size_fidelity.h"
+#include "mesher/surface_prepare.h"
+#include "mesher/volume_mesh.h"
+#include "sizing/features.h"
 
 namespace kdmesh {
 namespace {
@@ -31,62 +32,38 @@ struct Model {
   FeatureEdges features;
 };
 
-void finish(Model& m) {
-  PreparedSurface& s = m.surface;
-  s.tri_shell.assign(s.mesh.num_tris(), 0);
-  s.shell_body = {0};
-  s.shell_parent = {kNoFacet};
-  s.num_bodies = 1;
-  for (int a = 0; a < 3; ++a) {
-    s.bbox_min[a] = INFINITY;
-    s.bbox_max[a] = -INFINITY;
-  }
-  for (std::size_t i = 0; i < s.mesh.points.size(); ++i)
-    for (int a = 0; a < 3; ++a) {
-      s.bbox_min[a] = std::min(s.bbox_min[a], s.mesh.points.p(std::uint32_t(i))[a]);
-      s.bbox_max[a] = std::max(s.bbox_max[a], s.mesh.points.p(std::uint32_t(i))[a]);
-    }
+/// A raw surface through the pipeline's preparation and feature detection.
+Model prepared(SurfaceMesh mesh, const char* name) {
+  Model m;
+  m.surface = prepare_surface(std::move(mesh), name);
+  m.features = detect_sharp_edges(m.surface.mesh, 30);
+  return m;
 }
 
 Model box(double L) {
-  Model m;
-  for (int i = 0; i < 8; ++i) m.surface.mesh.points.push_back(L * (i & 1), L * (i >> 1 & 1), L * (i >> 2 & 1));
-  // Outward, counter-clockwise seen from outside.
-  m.surface.mesh.tris = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
-                         2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
-  m.features.edges = {0, 1, 0, 2, 0, 4, 1, 3, 1, 5, 2, 3, 2, 6, 3, 7, 4, 5, 4, 6, 5, 7, 6, 7};
-  m.features.corners = {0, 1, 2, 3, 4, 5, 6, 7};
-  m.surface.volume = L * L * L;
-  m.surface.shell_volume = {m.surface.volume};
-  finish(m);
-  return m;
+  SurfaceMesh s;
+  for (int i = 0; i < 8; ++i) s.points.push_back(L * (i & 1), L * (i >> 1 & 1), L * (i >> 2 & 1));
+  s.tris = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+            2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+  return prepared(std::move(s), "box");
 }
 
+/// n-gon prism of radius r: the rims are features (90 degrees), the sides' creases are not.
 Model cylinder(double r, double height, int n) {
-  Model m;
-  auto& P = m.surface.mesh.points;
+  SurfaceMesh s;
   for (int k = 0; k < 2; ++k)
     for (int i = 0; i < n; ++i) {
       const double t = 2 * std::numbers::pi * i / n;
-      P.push_back(r * std::cos(t), r * std::sin(t), k * height);
+      s.points.push_back(r * std::cos(t), r * std::sin(t), k * height);
     }
   const std::uint32_t cb = 2 * n, ct = 2 * n + 1;
-  P.push_back(0, 0, 0);
-  P.push_back(0, 0, height);
-  auto& T = m.surface.mesh.tris;
+  s.points.push_back(0, 0, 0);
+  s.points.push_back(0, 0, height);
   for (std::uint32_t i = 0; i < std::uint32_t(n); ++i) {
     const std::uint32_t j = (i + 1) % n;
-    T.insert(T.end(), {i, j, n + j, i, n + j, n + i});  // side, outward
-    T.insert(T.end(), {cb, j, i});                      // bottom, normal -z
-    T.insert(T.end(), {ct, n + i, n + j});              // top, normal +z
-    m.features.edges.insert(m.features.edges.end(), {i, j, n + i, n + j});
+    s.tris.insert(s.tris.end(), {i, j, n + j, i, n + j, n + i, cb, j, i, ct, n + i, n + j});
   }
-  for (std::size_t e = 0; e < m.features.edges.size(); e += 2)
-    if (m.features.edges[e] > m.features.edges[e + 1]) std::swap(m.features.edges[e], m.features.edges[e + 1]);
-  m.surface.volume = 0.5 * n * r * r * std::sin(2 * std::numbers::pi / n) * height;
-  m.surface.shell_volume = {m.surface.volume};
-  finish(m);
-  return m;
+  return prepared(std::move(s), "cylinder");
 }
 
 int run(int argc, char** argv) {
@@ -163,83 +140,29 @@ int run(int argc, char** argv) {
               cpu_total, double(nodes.size_count()) / cpu_total);
   if (!fidelity) return 0;
   sw.reset();
-  const Ordering order = make_order(nodes.points, OrderOptions{});
-  const DelaunayResult dr = delaunay(nodes.points, order);
-  const std::vector<std::uint32_t> all = finite_tets(dr.tri);
-  std::vector<std::uint32_t> inside, solid;
-  for (std::size_t t = 0; t < all.size(); t += 4) {
-    double c[3] = {0, 0, 0};
-    for (int k = 0; k < 4; ++k)
-      for (int a = 0; a < 3; ++a) c[a] += nodes.points.p(all[t + k])[a] / 4;
-    if (query.side(c) > 0) {
-      inside.insert(inside.end(), &all[t], &all[t] + 4);
-      // Flat tets on a non-axis-aligned planar face: its nodes are off the plane by rounding,
-      // so the face's Delaunay slivers have centroids a rounding error inside. Boundary
-      // recovery removes them; the second statistic leaves them out.
-      if (query.distance(c) > 1e-6 * sizing(c)) solid.insert(solid.end(), &all[t], &all[t] + 4);
-    }
-  }
-  const SizeFidelity f = measure_size_fidelity(nodes.points, inside, sizing);
-  std::printf("delaunay: %.3f s, %zu tets, %zu inside, %zu of them not flat on the surface\n",
-              sw.seconds(), all.size() / 4, inside.size() / 4, solid.size() / 4);
-  const SizeFidelity f2 = measure_size_fidelity(nodes.points, solid, sizing);
-  std::printf("fidelity without flat surface tets: edges %zu, mean ratio %.4f, in [0.7,1.4] %.4f, "
-              "short %.4f, long %.4f, min %.3f, max %.3f\n",
-              f2.edges, f2.mean_ratio, f2.in_range, f2.short_fraction, f2.long_fraction,
-              f2.min_ratio, f2.max_ratio);
-  inside.swap(solid);  // the statistics below use the non-flat tets
+  const VolumeMesh vm = mesh_volume(m.surface, query, sizing, nodes);
+  const double t_mesh = sw.seconds();
+  const MeshCheck check = check_volume_mesh(vm, m.surface, query, sizing);
+  std::printf("mesh: %.3f s, %zu tets, %zu Steiner points, %zu dropped nodes; check %s, volume "
+              "error %.3g, max Hausdorff %.3g h\n",
+              t_mesh, vm.num_tets(), vm.stats.steiner_points, vm.stats.dropped_nodes,
+              check.ok() ? "pass" : "FAIL", check.volume_error, check.max_hausdorff);
+  for (const std::string& f : check.failures) std::printf("  %s\n", f.c_str());
+  const SizeFidelity f = measure_size_fidelity(vm.nodes.points, vm.tets, sizing);
   std::printf("fidelity: edges %zu, mean ratio %.4f, in [0.7,1.4] %.4f, short %.4f, long %.4f, "
               "min %.3f, max %.3f\n",
               f.edges, f.mean_ratio, f.in_range, f.short_fraction, f.long_fraction, f.min_ratio,
               f.max_ratio);
-  // Boundary recovery: faces of the kept tets seen once are the boundary; each should have
-  // its 3 nodes on the surface, and the kept volume should equal the solid's.
-  {
-    std::vector<std::array<std::uint32_t, 3>> faces;
-    double vol = 0;
-    for (std::size_t t = 0; t < inside.size(); t += 4) {
-      const std::uint32_t* v = &inside[t];
-      const double* a = nodes.points.p(v[0]);
-      const double* b = nodes.points.p(v[1]);
-      const double* c = nodes.points.p(v[2]);
-      const double* d = nodes.points.p(v[3]);
-      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-      const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      const double x[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-      vol += (u[0] * (w[1] * x[2] - w[2] * x[1]) - u[1] * (w[0] * x[2] - w[2] * x[0]) +
-              u[2] * (w[0] * x[1] - w[1] * x[0])) / 6;
-      for (int i = 0; i < 4; ++i) {
-        std::array<std::uint32_t, 3> f = {v[(i + 1) % 4], v[(i + 2) % 4], v[(i + 3) % 4]};
-        std::sort(f.begin(), f.end());
-        faces.push_back(f);
-      }
-    }
-    std::sort(faces.begin(), faces.end());
-    std::size_t boundary = 0, bad = 0;
-    for (std::size_t i = 0; i < faces.size();) {
-      std::size_t j = i;
-      while (j < faces.size() && faces[j] == faces[i]) ++j;
-      if (j - i == 1) {
-        ++boundary;
-        for (const std::uint32_t v : faces[i])
-          if (nodes.kind[v] == NodeKind::interior) {
-            ++bad;
-            break;
-          }
-      }
-      i = j;
-    }
-    std::printf("boundary: %zu faces, %zu with an interior node; kept volume %.6g of %.6g\n",
-                boundary, bad, vol, m.surface.volume);
-  }
   // Breakdown by the kinds of the two end nodes: surface-surface (corner, edge or surface),
   // surface-interior, interior-interior.
   {
+    const std::vector<std::uint32_t>& tets = vm.tets;
+    const NodeSet& mn = vm.nodes;
     std::vector<std::uint64_t> edges;
-    for (std::size_t t = 0; t < inside.size(); t += 4)
+    for (std::size_t t = 0; t < tets.size(); t += 4)
       for (int i = 0; i < 4; ++i)
         for (int j = i + 1; j < 4; ++j) {
-          std::uint32_t a = inside[t + i], b = inside[t + j];
+          std::uint32_t a = tets[t + i], b = tets[t + j];
           if (a > b) std::swap(a, b);
           edges.push_back(std::uint64_t(a) << 32 | b);
         }
@@ -249,14 +172,11 @@ int run(int argc, char** argv) {
     std::size_t n[3] = {0, 0, 0}, in[3] = {0, 0, 0}, lo[3] = {0, 0, 0};
     for (const std::uint64_t e : edges) {
       const std::uint32_t a = std::uint32_t(e >> 32), b = std::uint32_t(e);
-      const int cls = (nodes.kind[a] == NodeKind::interior) + (nodes.kind[b] == NodeKind::interior);
-      const double* p = nodes.points.p(a);
-      const double* q = nodes.points.p(b);
-      const double m[3] = {(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2};
-      const double r = std::hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]) / sizing(m);
-      if (r > 4 && std::getenv("KDMESH_BENCH_DEBUG"))
-        std::printf("long edge %u (%d) %g %g %g - %u (%d) %g %g %g\n", a, int(nodes.kind[a]), p[0],
-                    p[1], p[2], b, int(nodes.kind[b]), q[0], q[1], q[2]);
+      const int cls = (mn.kind[a] == NodeKind::interior) + (mn.kind[b] == NodeKind::interior);
+      const double* p = mn.points.p(a);
+      const double* q = mn.points.p(b);
+      const double mid[3] = {(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2};
+      const double r = std::hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]) / sizing(mid);
       sum[cls] += r;
       ++n[cls];
       in[cls] += r >= 0.7 && r <= 1.4;
