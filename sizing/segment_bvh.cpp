@@ -89,19 +89,19 @@ void SegmentBvh::build(std::vector<std::uint32_t>& ids, const std::vector<double
   int axis = 0;
   for (int k = 1; k < 3; ++k)
     if (chi[k] - clo[k] > chi[axis] - clo[axis]) axis = k;
+  // An inner node whose children hold [begin, mid) and [mid, end).
+  auto split_at = [&](std::size_t mid) {
+    const std::size_t c = nodes_.size();
+    nodes_.resize(c + 2);
+    build(ids, centroid, in, begin, mid, c, depth + 1);
+    build(ids, centroid, in, mid, end, c + 1, depth + 1);
+    node.link = std::uint32_t(c) << kCountBits;
+    nodes_[slot] = node;
+  };
   if (end - begin <= kLeaf || !(chi[axis] > clo[axis])) {
     // Leaf (also when every centroid coincides: no split would separate them). Such a leaf
     // may exceed kLeaf; split it by count then, so that the count fits its bits.
-    if (end - begin > kCountMask) {
-      const std::size_t mid = begin + (end - begin) / 2;
-      const std::size_t c = nodes_.size();
-      nodes_.resize(c + 2);
-      build(ids, centroid, in, begin, mid, c, depth + 1);
-      build(ids, centroid, in, mid, end, c + 1, depth + 1);
-      node.link = std::uint32_t(c) << kCountBits;
-      nodes_[slot] = node;
-      return;
-    }
+    if (end - begin > kCountMask) return split_at(begin + (end - begin) / 2);
     node.link = (std::uint32_t(segs_.size()) << kCountBits) | std::uint32_t(end - begin);
     for (std::size_t i = begin; i < end; ++i) {
       const std::size_t s = ids[i];
@@ -139,12 +139,7 @@ void SegmentBvh::build(std::vector<std::uint32_t>& ids, const std::vector<double
                        return cp != cq ? cp < cq : p < q;  // total order: deterministic
                      });
   }
-  const std::size_t c = nodes_.size();
-  nodes_.resize(c + 2);
-  build(ids, centroid, in, begin, mid, c, depth + 1);
-  build(ids, centroid, in, mid, end, c + 1, depth + 1);
-  node.link = std::uint32_t(c) << kCountBits;
-  nodes_[slot] = node;
+  split_at(mid);
 }
 
 double SegmentBvh::min_value(const double* x, double g, double best) const {
