@@ -8,6 +8,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 
 #include "core/error.h"
 
@@ -77,6 +78,20 @@ void AtomicFile::commit() {
 void remove_temporaries_on_signal() {
   std::signal(SIGINT, remove_temporaries_and_die);
   std::signal(SIGTERM, remove_temporaries_and_die);
+}
+
+int remove_temporaries_of(const std::string& path, long pid) {
+  namespace fs = std::filesystem;
+  const fs::path target(path);
+  const std::string prefix = target.filename().string() + ".tmp-" + std::to_string(pid) + "-";
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::error_code ec;
+  int removed = 0;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.compare(0, prefix.size(), prefix) == 0 && fs::remove(it->path(), ec)) ++removed;
+  }
+  return removed;
 }
 
 }  // namespace kdmesh

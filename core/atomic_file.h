@@ -34,4 +34,9 @@ class AtomicFile {
 /// run leaves neither a partial output nor a stray temporary file. Executables call it once.
 void remove_temporaries_on_signal();
 
+/// Removes the temporary files an AtomicFile for `path` created in process `pid`
+/// ("<path>.tmp-<pid>-<n>"), e.g. after that process crashed. Returns how many were removed.
+/// Never throws (an unreadable directory removes nothing).
+int remove_temporaries_of(const std::string& path, long pid);
+
 }  // namespace kdmesh

@@ -297,6 +297,34 @@ TEST(CliBatch, FailedJobIsIsolatedAndConcurrencyIsDeterministic) {
   EXPECT_EQ(slurp(dirs[0] / "small.xyz"), slurp(dirs[1] / "small.xyz"));
 }
 
+// A job whose process crashes (here a SIGSEGV injected through KDMESH_INJECT_CRASH, the
+// documented test hook of tools/lib/job_process.h) fails alone: the batch goes on, the other
+// jobs' outputs are written, and the crashed job leaves neither outputs nor temporaries, even
+// when it dies with one output already written to its temporary file.
+TEST(CliBatch, CrashedJobIsIsolatedAndLeavesNoTemporaries) {
+  const fs::path yaml = write_three_job_batch();
+  const fs::path dir = tmpdir() / "batch-crash";
+  fs::remove_all(dir);
+  const std::string crash_at = "big@writing " + (dir / "big.xyz").string();
+  const CliResult r = kdmesh::test::run_kdmesh("batch " + yaml.string() + " --jobs 2 --only big,small --out-dir " +
+                                                   dir.string() + " --json",
+                                               tmpdir(), "KDMESH_INJECT_CRASH='" + crash_at + "'");
+  EXPECT_EQ(r.code, 1) << r.err;  // internal error: a crash is a bug
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["jobs"].size(), 2u);
+  EXPECT_EQ(j["jobs"][0]["job"], "big");
+  EXPECT_EQ(j["jobs"][0]["status"], "failed");
+  const std::string message = j["jobs"][0]["error"]["message"];
+  EXPECT_NE(message.find("killed by signal 11"), std::string::npos) << message;
+  EXPECT_EQ(j["jobs"][1]["status"], "ok");
+  EXPECT_TRUE(fs::exists(dir / "small.vtu"));
+  EXPECT_TRUE(fs::exists(dir / "small.json"));
+  for (const char* f : {"big.vtu", "big.json", "big.xyz"}) EXPECT_FALSE(fs::exists(dir / f)) << f;
+  EXPECT_FALSE(has_temp_leftovers(dir));
+  EXPECT_NE(r.err.find("writing " + (dir / "big.vtu").string()), std::string::npos)
+      << "the crash must come after the first output was opened:\n" << r.err;
+}
+
 TEST(CliBatch, HumanTableNamesTheFailedJob) {
   const fs::path yaml = write_three_job_batch();
   const fs::path dir = tmpdir() / "batch-human";

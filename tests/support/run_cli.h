@@ -36,11 +36,14 @@ inline std::string slurp(const std::filesystem::path& p) {
 }
 
 /// Runs `kdmesh <args>` (the build's executable), capturing its output through files in `dir`.
-inline CliResult run_kdmesh(const std::string& args, const std::filesystem::path& dir) {
+/// `env` is prepended to the shell command, e.g. "NAME='value'".
+inline CliResult run_kdmesh(const std::string& args, const std::filesystem::path& dir,
+                            const std::string& env = "") {
   static int counter = 0;
   const std::string tag = std::to_string(::getpid()) + "-" + std::to_string(counter++);
   const std::filesystem::path out = dir / ("stdout-" + tag), err = dir / ("stderr-" + tag);
-  const std::string cmd = std::string(KDMESH_EXE) + " " + args + " >" + out.string() + " 2>" + err.string();
+  const std::string cmd = (env.empty() ? "" : env + " ") + std::string(KDMESH_EXE) + " " + args +
+                          " >" + out.string() + " 2>" + err.string();
   const int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
 }

@@ -3,7 +3,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cstdio>
 #include <iomanip>
 #include <iostream>
@@ -12,13 +11,13 @@
 #include <mutex>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "core/error.h"
 #include "core/timer.h"
 #include "tools/kdmesh/cli.h"
 #include "tools/lib/job_config.h"
+#include "tools/lib/job_process.h"
 #include "tools/lib/mesh_job.h"
 
 namespace kdmesh::cli {
@@ -78,7 +77,8 @@ void print_table(std::ostream& os, const std::vector<MeshJobResult>& results) {
        << std::right << std::setw(10) << count("nodes") << std::setw(11) << count("tets")
        << std::setw(14) << (q ? fixed(j["quality"]["min_dihedral"].get<double>(), 2) : "-")
        << std::setw(18) << (q ? fixed(j["size_fidelity"]["mean_ratio"].get<double>(), 3) : "-")
-       << std::setw(10) << fixed(j["seconds"].value("total", 0.0), 2) << "\n";
+       << std::setw(10)
+       << (j.contains("seconds") ? fixed(j["seconds"].value("total", 0.0), 2) : std::string("-")) << "\n";
   }
 }
 
@@ -99,45 +99,34 @@ int run_batch(const Options& o) {
     std::cerr << "kdmesh: [" << name << "] " << msg << std::endl;
   };
 
-  std::vector<MeshJobResult> results(jobs.size());
-  std::atomic<std::size_t> next{0};
-  auto worker = [&] {
-    for (std::size_t i; (i = next.fetch_add(1)) < jobs.size();) {
-      const MeshJob& job = jobs[i];
-      // Whole progress lines: one per 10% step on a terminal, one per 25% in logs.
-      auto last = std::make_shared<std::map<std::string, int>>();
-      MeshJobCallbacks cb;
-      cb.log = [&, name = job.name](const std::string& s) { log(name, s); };
-      if (!out.quiet)
-        cb.progress = [&, last, name = job.name](const std::string& stage, double f) {
-          const int unit = tty ? 10 : 25;
-          const int percent = int(f * 100) / unit * unit;
-          {  // stages may report from worker threads
-            std::lock_guard<std::mutex> lock(log_mutex);
-            int& prev = last->try_emplace(stage, -1).first->second;
-            if (percent <= prev) return;
-            prev = percent;
-          }
-          log(name, stage + " " + std::to_string(percent) + "%");
-        };
-      try {
-        results[i] = run_mesh_job(job, cb);  // never throws by contract; guarded all the same
-      } catch (...) {
-        results[i].code = ExitCode::failure;
-        results[i].summary = {{"job", job.name}, {"status", "failed"},
-                              {"error", {{"type", "internal"}, {"exit_code", 1},
-                                         {"message", "unexpected error escaped the job"}}}};
-      }
-      if (results[i].ok())
-        log(job.name, "done");
-      else
-        log(job.name, "FAILED: " + results[i].summary["error"].value("message", std::string()));
-    }
+  // Each job in its own process: a crash (a bug, the OOM killer) fails that job only.
+  auto callbacks = [&](std::size_t i) {
+    const MeshJob& job = jobs[i];
+    // Whole progress lines: one per 10% step on a terminal, one per 25% in logs.
+    auto last = std::make_shared<std::map<std::string, int>>();
+    MeshJobCallbacks cb;
+    cb.log = [&, name = job.name](const std::string& s) { log(name, s); };
+    if (!out.quiet)
+      cb.progress = [&, last, name = job.name](const std::string& stage, double f) {
+        const int unit = tty ? 10 : 25;
+        const int percent = int(f * 100) / unit * unit;
+        {  // stages may report from worker threads
+          std::lock_guard<std::mutex> lock(log_mutex);
+          int& prev = last->try_emplace(stage, -1).first->second;
+          if (percent <= prev) return;
+          prev = percent;
+        }
+        log(name, stage + " " + std::to_string(percent) + "%");
+      };
+    return cb;
   };
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < workers; ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& t : pool) t.join();
+  auto done = [&](std::size_t i, const MeshJobResult& r) {
+    if (r.ok())
+      log(jobs[i].name, "done");
+    else
+      log(jobs[i].name, "FAILED: " + r.summary["error"].value("message", std::string()));
+  };
+  const std::vector<MeshJobResult> results = run_jobs_in_processes(jobs, workers, callbacks, done);
 
   // Exit code: 0 if all succeeded; the failed jobs' code if they all share one; else 1.
   std::size_t failed = 0;
@@ -187,7 +176,8 @@ void add_batch_command(CLI::App& app, Runner& run) {
   add_output_flags(cmd, o->out);
   cmd->footer(
       "Config errors (exit 3) name the file, line and key, and stop the batch before any job\n"
-      "runs. A job that fails is reported and the others continue. Exit code: 0 if every job\n"
+      "runs. Each job runs in its own process: a job that fails, or crashes, is reported and\n"
+      "the others continue. Exit code: 0 if every job\n"
       "succeeded; otherwise the failed jobs' code when they all share one, else 1.\n"
       "Schema: tools/lib/job_config.h.");
   cmd->callback([o, &run] { run = [o] { return run_batch(*o); }; });

@@ -352,6 +352,13 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
 
 }  // namespace
 
+std::vector<std::string> output_paths(const MeshJob& job) {
+  std::vector<std::string> paths;
+  for (const std::string* p : {&job.vtu, &job.summary, &job.nodes})
+    if (!p->empty()) paths.push_back(*p);
+  return paths;
+}
+
 MeshJobResult run_mesh_job(const MeshJob& job, const MeshJobCallbacks& callbacks) {
   MeshJobResult r;
   Stopwatch total;

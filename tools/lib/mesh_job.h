@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -28,6 +29,9 @@ struct MeshJob {
   bool check_delaunay = false; ///< exact validity check of the nodes' Delaunay
   std::string vtu, summary, nodes;  ///< output paths (usable as is); empty = not written
 };
+
+/// Every output path the job writes (the non-empty ones), e.g. to clean up after a crash.
+std::vector<std::string> output_paths(const MeshJob& job);
 
 /// Callbacks of a running job; each may be empty. They are called from the job's thread.
 struct MeshJobCallbacks {

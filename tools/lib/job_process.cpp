@@ -1,0 +1,202 @@
+// kdmesh — running meshing jobs in child processes.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "tools/lib/job_process.h"
+
+#include <poll.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <iostream>
+#include <string>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/timer.h"
+
+namespace kdmesh {
+
+namespace {
+
+// Running children, for the forwarding signal handler (no allocation or locks in a handler).
+constexpr int kMaxChildren = 1024;
+std::atomic<pid_t> g_children[kMaxChildren];
+
+extern "C" void forward_to_children_and_die(int sig) {
+  for (std::atomic<pid_t>& c : g_children) {
+    const pid_t pid = c.load();
+    if (pid > 0) ::kill(pid, sig);
+  }
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+void write_all(int fd, const std::string& s) {
+  for (std::size_t done = 0; done < s.size();) {
+    const ssize_t n = ::write(fd, s.data() + done, s.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return;  // the parent is gone; nothing useful left to do
+    done += std::size_t(n);
+  }
+}
+
+/// The child: run the job, send "<exit code>\n<summary json>" and exit with the job's code.
+[[noreturn]] void child_main(const MeshJob& job, const MeshJobCallbacks& cb, int fd) {
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  remove_temporaries_on_signal();
+  MeshJobCallbacks callbacks = cb;
+  if (const char* c = std::getenv("KDMESH_INJECT_CRASH")) {  // "<job>" or "<job>@<log prefix>"
+    const std::string spec = c;
+    const std::size_t at = spec.find('@');
+    if (spec.substr(0, at) == job.name) {
+      if (at == std::string::npos) std::raise(SIGSEGV);
+      callbacks.log = [cb, prefix = spec.substr(at + 1)](const std::string& s) {
+        if (s.compare(0, prefix.size(), prefix) == 0) std::raise(SIGSEGV);
+        if (cb.log) cb.log(s);
+      };
+    }
+  }
+  MeshJobResult r;
+  try {
+    r = run_mesh_job(job, callbacks);
+  } catch (...) {  // never by contract
+    r.code = ExitCode::failure;
+    r.summary = {{"job", job.name}, {"status", "failed"},
+                 {"error", {{"type", "internal"}, {"exit_code", 1},
+                            {"message", "unexpected error escaped the job"}}}};
+  }
+  write_all(fd, std::to_string(int(r.code)) + "\n" + r.summary.dump());
+  ::close(fd);
+  std::cout.flush();
+  std::cerr.flush();
+  std::_Exit(int(r.code));  // no atexit handlers or static destructors of the parent's state
+}
+
+/// The result of a child that produced no complete summary.
+MeshJobResult lost_child(const MeshJob& job, int status, double seconds) {
+  std::string why;
+  if (WIFSIGNALED(status)) {
+    const int sig = WTERMSIG(status);
+    why = "crashed: killed by signal " + std::to_string(sig) + " (" + strsignal(sig) + ")";
+    if (sig == SIGKILL) why += "; out of memory (the kernel's OOM killer)?";
+  } else {
+    why = "exited with status " + std::to_string(WEXITSTATUS(status)) + " without a result";
+  }
+  MeshJobResult r;
+  r.code = ExitCode::failure;
+  r.summary = {{"job", job.name}, {"input", job.input}, {"status", "failed"},
+               {"seconds", {{"total", seconds}}},
+               {"error", {{"type", error_type_name(ExitCode::failure)}, {"exit_code", 1},
+                          {"message", "job '" + job.name + "' " + why +
+                                          "; no output was written, the other jobs are unaffected"}}}};
+  return r;
+}
+
+/// Parses a child's "<code>\n<json>"; false if incomplete.
+bool parse_result(const std::string& text, MeshJobResult& r) {
+  const std::size_t nl = text.find('\n');
+  if (nl == std::string::npos || nl == 0) return false;
+  try {
+    const int code = std::stoi(text.substr(0, nl));
+    r.summary = nlohmann::json::parse(text.begin() + long(nl) + 1, text.end());
+    r.code = ExitCode(code);
+    return true;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+struct Running {
+  std::size_t job;
+  pid_t pid;
+  int fd;
+  std::string text;
+  int slot;
+  Stopwatch clock;
+};
+
+}  // namespace
+
+std::vector<MeshJobResult> run_jobs_in_processes(
+    const std::vector<MeshJob>& jobs, unsigned workers,
+    const std::function<MeshJobCallbacks(std::size_t)>& callbacks,
+    const std::function<void(std::size_t, const MeshJobResult&)>& done) {
+  std::vector<MeshJobResult> results(jobs.size());
+  if (workers == 0) workers = 1;
+  if (workers > unsigned(kMaxChildren)) workers = kMaxChildren;
+  auto old_int = std::signal(SIGINT, forward_to_children_and_die);
+  auto old_term = std::signal(SIGTERM, forward_to_children_and_die);
+  std::cout.flush();
+  std::cerr.flush();
+
+  std::vector<Running> running;
+  std::size_t next = 0;
+  while (next < jobs.size() || !running.empty()) {
+    while (next < jobs.size() && running.size() < workers) {
+      int fds[2];
+      if (::pipe(fds) != 0) throw Error(std::string("cannot create a pipe: ") + std::strerror(errno));
+      const std::size_t i = next++;
+      const MeshJobCallbacks cb = callbacks ? callbacks(i) : MeshJobCallbacks{};
+      const pid_t pid = ::fork();
+      if (pid < 0) {
+        ::close(fds[0]);
+        ::close(fds[1]);
+        throw Error(std::string("cannot start a job process: ") + std::strerror(errno));
+      }
+      if (pid == 0) {
+        ::close(fds[0]);
+        for (const Running& r : running) ::close(r.fd);
+        child_main(jobs[i], cb, fds[1]);
+      }
+      ::close(fds[1]);
+      int slot = 0;
+      while (g_children[slot].load() > 0) ++slot;  // a free slot exists: running < kMaxChildren
+      g_children[slot].store(pid);
+      running.push_back({i, pid, fds[0], {}, slot, Stopwatch()});
+    }
+    std::vector<pollfd> polls;
+    for (const Running& r : running) polls.push_back({r.fd, POLLIN, 0});
+    if (::poll(polls.data(), polls.size(), -1) < 0) {
+      if (errno == EINTR) continue;
+      throw Error(std::string("poll failed: ") + std::strerror(errno));
+    }
+    for (std::size_t k = running.size(); k-- > 0;) {
+      if (!(polls[k].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+      Running& r = running[k];
+      char buf[65536];
+      const ssize_t n = ::read(r.fd, buf, sizeof buf);
+      if (n < 0 && errno == EINTR) continue;
+      if (n > 0) {
+        r.text.append(buf, std::size_t(n));
+        continue;
+      }
+      // End of file: the child has finished (or died).
+      ::close(r.fd);
+      int status = 0;
+      while (::waitpid(r.pid, &status, 0) < 0 && errno == EINTR) {
+      }
+      g_children[r.slot].store(0);
+      const MeshJob& job = jobs[r.job];
+      MeshJobResult& result = results[r.job];
+      const bool clean_exit = WIFEXITED(status);
+      if (!clean_exit || !parse_result(r.text, result)) {
+        result = lost_child(job, status, r.clock.seconds());
+        for (const std::string& path : output_paths(job)) remove_temporaries_of(path, long(r.pid));
+      }
+      if (done) done(r.job, result);
+      running.erase(running.begin() + long(k));
+    }
+  }
+  std::signal(SIGINT, old_int);
+  std::signal(SIGTERM, old_term);
+  return results;
+}
+
+}  // namespace kdmesh
