@@ -16,6 +16,7 @@ enum class ExitCode : int {
   geometry = 4,     ///< input that has no valid result (e.g. all points coplanar)
   check = 5,        ///< a --check verification found a mismatch
   output = 6,       ///< an output file could not be written
+  resource = 7,     ///< the job would exceed a resource limit (e.g. --max-memory)
 };
 
 class Error : public std::runtime_error {
@@ -71,6 +72,12 @@ class OutputError : public Error {
  public:
   OutputError(const std::string& file, const std::string& msg)
       : Error(file + ": " + msg, ExitCode::output) {}
+};
+
+/// A job refused before it starts because it would exceed a resource limit (memory).
+class ResourceError : public Error {
+ public:
+  explicit ResourceError(const std::string& msg) : Error(msg, ExitCode::resource) {}
 };
 
 /// A bad option value passed to a library function or command.

@@ -144,6 +144,11 @@ TEST(Cli, ErrorsHaveTheirExitCodesAndWriteNothing) {
   r = kdmesh("delaunay " + write_file("empty.xyz", "# nothing\n").string() + " -o " + out.string());
   EXPECT_EQ(r.code, 4);
   EXPECT_NE(r.err.find("empty"), std::string::npos) << r.err;
+  // over the memory limit -> 7, before tetrahedralizing (16 MB base + 300 B per point > 1 MB)
+  r = kdmesh("delaunay " + flat.string() + " --max-memory 1M -o " + out.string());
+  EXPECT_EQ(r.code, 7);
+  EXPECT_NE(r.err.find("the limit is 1 MB (--max-memory)"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("tetrahedralizing"), std::string::npos) << r.err;
   // malformed -> 3, names file and line
   r = kdmesh("delaunay " + write_file("bad.xyz", "0 0 0\n1 0 0\n0 1 oops\n").string() + " -o " + out.string());
   EXPECT_EQ(r.code, 3);

@@ -225,6 +225,33 @@ TEST(JobConfig, MissingOrBadSize) {
   EXPECT_TRUE(contains(zs.what(), "zones[0] (point): missing required key 'size'")) << zs.what();
 }
 
+TEST(JobConfig, MaxMemory) {
+  const fs::path file = write_batch(R"(defaults:
+  max_memory: 8G
+jobs:
+  - name: a
+    input: parts/block.stl
+    size: 1
+  - name: b
+    input: parts/block.stl
+    size: 1
+    max_memory: none
+  - name: c
+    input: parts/block.stl
+    size: 1
+    max_memory: 512MB
+)");
+  const kdmesh::BatchConfig c = kdmesh::load_batch_config(file.string());
+  ASSERT_EQ(c.jobs.size(), 3u);
+  EXPECT_DOUBLE_EQ(c.jobs[0].max_memory, 8e9);
+  EXPECT_DOUBLE_EQ(c.jobs[1].max_memory, -1);  // no limit
+  EXPECT_DOUBLE_EQ(c.jobs[2].max_memory, 512e6);
+  const InputError e = load_error("jobs:\n  - name: a\n    input: parts/block.stl\n    size: 1\n    max_memory: 8Q\n");
+  EXPECT_EQ(e.line(), 5u);
+  EXPECT_TRUE(contains(e.what(), "key 'max_memory'")) << e.what();
+  EXPECT_TRUE(contains(e.what(), "'8Q' is not a memory amount")) << e.what();
+}
+
 TEST(JobConfig, BadZoneTypeAndOrder) {
   const InputError e = load_error(R"(jobs:
   - name: a

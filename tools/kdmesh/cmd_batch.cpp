@@ -15,6 +15,7 @@
 
 #include "core/error.h"
 #include "core/timer.h"
+#include "mesher/resource_estimate.h"
 #include "tools/kdmesh/cli.h"
 #include "tools/lib/job_config.h"
 #include "tools/lib/job_process.h"
@@ -29,6 +30,7 @@ struct Options {
   unsigned jobs = 1;
   std::string out_dir;
   std::vector<std::string> only;
+  std::string max_memory;  ///< for jobs that set none
   Output out;
 };
 
@@ -86,7 +88,12 @@ int run_batch(const Options& o) {
   const Output& out = o.out;
   Stopwatch total;
   const BatchConfig config = load_batch_config(o.file, o.out_dir);  // InputError: exit 3
-  const std::vector<MeshJob> jobs = select_jobs(config, o.only);
+  std::vector<MeshJob> jobs = select_jobs(config, o.only);
+  if (!o.max_memory.empty()) {
+    const double limit = parse_memory_amount(o.max_memory, "--max-memory");
+    for (MeshJob& j : jobs)
+      if (j.max_memory == 0) j.max_memory = limit;
+  }
   const unsigned workers = std::max(1u, std::min<unsigned>(o.jobs, unsigned(jobs.size())));
   out.stage(std::to_string(jobs.size()) + " job" + (jobs.size() == 1 ? "" : "s") + " from " +
             o.file + ", " + std::to_string(workers) + " at a time");
@@ -173,6 +180,9 @@ void add_batch_command(CLI::App& app, Runner& run) {
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
       ->delimiter(',');
+  cmd->add_option("--max-memory", o->max_memory,
+                  "Memory limit of each job that sets no max_memory, e.g. 8G, none (default: the "
+                  "machine's memory); a job whose estimate exceeds it fails with exit 7");
   add_output_flags(cmd, o->out);
   cmd->footer(
       "Config errors (exit 3) name the file, line and key, and stop the batch before any job\n"

@@ -13,6 +13,7 @@
 #include "mesher/delaunay.h"
 #include "mesher/order.h"
 #include "mesher/reference_delaunay.h"
+#include "mesher/resource_estimate.h"
 #include "mesher/tet_adjacency.h"
 #include "mesher/tet_compare.h"
 #include "tools/kdmesh/cli.h"
@@ -28,9 +29,31 @@ struct Options {
   std::string kernel = "kdmesh";
   std::uint64_t seed = 1;
   bool check = false;
+  std::string max_memory;  ///< empty: the machine's memory
   std::string output;
   Output out;
 };
+
+/// Peak bytes per point of `kdmesh delaunay`, measured with /usr/bin/time -v on uniform
+/// points (docs/robustness.md, "Memory"): the kernel alone, and what -o and --check add.
+constexpr double kDelaunayBytesPerPoint = 300, kOutputBytesPerPoint = 720, kCheckBytesPerPoint = 1100;
+
+/// Prints the memory estimate and refuses (ResourceError) a run that would exceed the limit.
+void check_memory(const Options& o, std::size_t n, nlohmann::json& j) {
+  const double limit_option = o.max_memory.empty() ? 0 : parse_memory_amount(o.max_memory, "--max-memory");
+  const double limit = limit_option < 0 ? 0 : limit_option > 0 ? limit_option : physical_memory_bytes();
+  const double per_point = kDelaunayBytesPerPoint + (o.output.empty() ? 0 : kOutputBytesPerPoint) +
+                           (o.check ? kCheckBytesPerPoint : 0);
+  const double bytes = 16e6 + per_point * double(n);
+  const std::string limit_text = limit > 0 ? format_bytes(limit) : std::string("none");
+  j["estimate"] = {{"peak_bytes", bytes}, {"limit_bytes", limit}};
+  o.out.stage("estimate: ~" + format_bytes(bytes) + " peak memory (limit " + limit_text + ")");
+  if (limit > 0 && bytes > limit)
+    throw ResourceError(o.input + ": " + std::to_string(n) + " points need an estimated " + format_bytes(bytes) +
+                        " of memory but the limit is " + limit_text +
+                        (limit_option > 0 ? " (--max-memory)" : " (the machine's memory)") +
+                        "; raise it with --max-memory (none = no limit)");
+}
 
 nlohmann::json run_checks(const Options& o, const PointSet& pts, const Triangulation& tri,
                           const std::vector<std::uint32_t>& canon_tets) {
@@ -53,6 +76,7 @@ int run_delaunay(const Options& o) {
   const double t_read = clock.seconds();
   const std::size_t n = pts.size();
   out.stage(std::to_string(n) + " points");
+  check_memory(o, n, j);
 
   clock.reset();
   const bool cgal_sort = o.order == "cgal";
@@ -175,6 +199,9 @@ void add_delaunay_command(CLI::App& app, Runner& run) {
   cmd->add_option("--seed", o->seed, "Seed of the random and brio orders")->capture_default_str();
   cmd->add_flag("--check", o->check,
                 "Verify: exact validity, then compare with TetGen 1.5 and CGAL 5.5; exit 5 on mismatch");
+  cmd->add_option("--max-memory", o->max_memory,
+                  "Refuse the run (exit 7) if its estimated peak memory exceeds this, e.g. 8G, "
+                  "none (default: the machine's memory)");
   cmd->add_option("-o,--output", o->output, "Output .vtu file (binary, compressed)");
   add_output_flags(cmd, o->out);
   cmd->callback([o, &run] { run = [o] { return run_delaunay(*o); }; });

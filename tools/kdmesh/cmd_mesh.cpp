@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "mesher/order.h"
+#include "mesher/resource_estimate.h"
 #include "tools/kdmesh/cli.h"
 #include "tools/lib/mesh_job.h"
 
@@ -29,6 +30,7 @@ struct Options {
   std::string order = "kd-bfs";
   std::uint64_t seed = 1;
   std::vector<std::string> checks;
+  std::string max_memory;   ///< empty: the machine's memory
   std::string output, summary, nodes;
   Output out;
 };
@@ -61,6 +63,7 @@ MeshJob make_job(const Options& o) {
     if (c == "tetgen") job.check_tetgen = true;
     if (c == "delaunay") job.check_delaunay = true;
   }
+  if (!o.max_memory.empty()) job.max_memory = parse_memory_amount(o.max_memory, "--max-memory");
   job.vtu = o.output;
   job.summary = o.summary;
   job.nodes = o.nodes;
@@ -129,6 +132,9 @@ void add_mesh_command(CLI::App& app, Runner& run) {
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
       ->delimiter(',');
+  cmd->add_option("--max-memory", o->max_memory,
+                  "Refuse the job (exit 7) if its estimated peak memory exceeds this, e.g. 8G, "
+                  "512M, none (default: the machine's memory)");
   cmd->add_option("-o,--output", o->output, "Output mesh (.vtu)");
   cmd->add_option("--summary", o->summary, "Output summary (.json)");
   cmd->add_option("--nodes", o->nodes, "Output nodes (.xyz)");

@@ -16,6 +16,7 @@
 #include <utility>
 
 #include "core/error.h"
+#include "mesher/resource_estimate.h"
 
 namespace kdmesh {
 
@@ -53,7 +54,7 @@ namespace {
 const std::vector<std::string> kTopKeys = {"defaults", "jobs"};
 const std::vector<std::string> kJobKeys = {"name",        "input", "scale", "size",  "min_size",
                                            "gradation",   "sharp_angle",    "zones", "order",
-                                           "seed",        "check", "output"};
+                                           "seed",        "check", "max_memory", "output"};
 const std::vector<std::string> kZoneTypes = {"sharp_edges", "polyline", "segment", "plane",
                                              "point",       "box",      "ball"};
 const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes"};
@@ -319,6 +320,15 @@ class Loader {
           fail(c[i], key("check") + ": unknown check " + describe(c[i]) +
                          (near.empty() ? "" : " (did you mean '" + near + "'?)") + "; valid checks: " + join(kChecks));
         }
+      }
+    }
+    if (e.count("max_memory")) {
+      const YAML::Node v = e.at("max_memory").value;
+      const std::string text = string(v, key("max_memory"));
+      try {
+        job.max_memory = parse_memory_amount(text, key("max_memory"));
+      } catch (const UsageError& err) {
+        fail(v, err.what());
       }
     }
     if (e.count("output")) {

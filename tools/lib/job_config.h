@@ -33,6 +33,8 @@ namespace kdmesh {
 ///                  brio, random, input; default kd-bfs)
 ///     seed         optional unsigned integer (default 1)
 ///     check        optional list of: tetgen, delaunay
+///     max_memory   optional memory limit, e.g. 8G, 512M, none (default: the machine's memory);
+///                  a job whose estimated peak memory exceeds it fails with exit 7 before placement
 ///     output       optional mapping {vtu, summary, nodes}: paths relative to out_dir
 ///
 /// Every error is an InputError naming the file, the 1-based line and the key at fault:

@@ -20,6 +20,7 @@
 #include "mesher/mesh_check.h"
 #include "mesher/node_placement.h"
 #include "mesher/quality.h"
+#include "mesher/resource_estimate.h"
 #include "mesher/size_fidelity.h"
 #include "mesher/surface_prepare.h"
 #include "mesher/surface_query.h"
@@ -107,6 +108,7 @@ std::string error_type_name(ExitCode code) {
     case ExitCode::geometry: return "geometry";
     case ExitCode::check: return "check";
     case ExitCode::output: return "output";
+    case ExitCode::resource: return "resource";
     case ExitCode::failure: break;
   }
   return "internal";
@@ -192,6 +194,30 @@ void make_parent_dirs(const std::string& path) {
   if (ec) throw OutputError(path, "cannot create directory '" + parent.string() + "': " + ec.message());
 }
 
+/// Estimates the job's nodes and peak memory, reports them, and refuses the job (ResourceError)
+/// when the estimate exceeds its memory limit — before anything large is allocated.
+template <class Log>
+void check_memory_estimate(const MeshJob& job, const PreparedSurface& surface, const SurfaceQuery& query,
+                           const SizingField& sizing, nlohmann::json& j, const Log& log) {
+  Stopwatch clock;
+  const double limit = job.max_memory < 0 ? 0 : job.max_memory > 0 ? job.max_memory : physical_memory_bytes();
+  // Beyond twice the limit the exact excess does not matter: stop integrating there.
+  const double cap = limit > 0 ? std::max(1e6, 2 * limit / kBytesPerNode) : 2e9;
+  const ResourceEstimate e = estimate_resources(surface, query, sizing, cap);
+  j["seconds"]["estimate"] = clock.seconds();
+  const std::string nodes = (e.capped ? "more than " : "~") + std::to_string(std::llround(e.nodes));
+  const std::string limit_text = limit > 0 ? format_bytes(limit) : std::string("none");
+  j["estimate"] = {{"nodes", e.nodes}, {"surface_nodes", e.surface_nodes}, {"interior_nodes", e.interior_nodes},
+                   {"peak_bytes", e.peak_bytes}, {"capped", e.capped}, {"limit_bytes", limit}};
+  log("estimate: " + nodes + " nodes, " + (e.capped ? "more than " : "~") + format_bytes(e.peak_bytes) +
+      " peak memory (limit " + limit_text + ")");
+  if (limit > 0 && e.peak_bytes > limit)
+    throw ResourceError("job '" + job.name + "': needs an estimated " + (e.capped ? "more than " : "") +
+                        format_bytes(e.peak_bytes) + " of memory (" + nodes + " nodes) but the limit is " +
+                        limit_text + (job.max_memory > 0 ? " (max_memory / --max-memory)" : " (the machine's memory)") +
+                        "; use a larger size, or raise the limit with --max-memory (none = no limit)");
+}
+
 /// The pipeline; fills `j` as it goes, so a failure still reports what was measured. Throws.
 void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json& j) {
   auto log = [&](const std::string& s) {
@@ -249,6 +275,8 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
   clock.reset();
   const SurfaceQuery query(surface.mesh);
   sec["query"] = clock.seconds();
+
+  check_memory_estimate(job, surface, query, sizing, j, log);
 
   clock.reset();
   log("placing nodes");

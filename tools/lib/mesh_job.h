@@ -27,6 +27,9 @@ struct MeshJob {
   std::uint64_t seed = 1;      ///< node placement and order seed
   bool check_tetgen = false;   ///< compare the nodes' Delaunay with TetGen 1.5 and CGAL 5.5
   bool check_delaunay = false; ///< exact validity check of the nodes' Delaunay
+  /// Memory limit in bytes: the job is refused (ResourceError, exit 7) before node placement
+  /// when its estimated peak memory exceeds it. 0 = the machine's physical memory; < 0 = none.
+  double max_memory = 0;
   std::string vtu, summary, nodes;  ///< output paths (usable as is); empty = not written
 };
 

@@ -1,0 +1,237 @@
+// kdmesh — node and memory estimate of a meshing job.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/resource_estimate.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <vector>
+
+#include "core/error.h"
+
+namespace kdmesh {
+
+namespace {
+
+double triangle_area(const double* a, const double* b, const double* c) {
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  return 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
+double dist2(const double* a, const double* b) {
+  return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+}
+
+/// Upper bound of h within distance `radius` of a point where it is `hc` (h is g-Lipschitz
+/// and at most h_max): what the lower bounds of the cap use.
+double h_upper(const SizingField& h, double hc, double radius) {
+  return std::min(h.max_size(), hc + h.options().gradation * radius);
+}
+
+struct Tri {
+  double p[3][3];
+  double c[3];
+  double hc;
+  double lower;  ///< lower bound of its node count
+};
+
+Tri make_tri(const double* a, const double* b, const double* c, const SizingField& h, ResourceEstimate& e) {
+  Tri t;
+  for (int i = 0; i < 3; ++i) {
+    t.p[0][i] = a[i], t.p[1][i] = b[i], t.p[2][i] = c[i];
+    t.c[i] = (a[i] + b[i] + c[i]) / 3;
+  }
+  t.hc = h(t.c);
+  ++e.samples;
+  const double radius = std::sqrt(std::max({dist2(t.c, a), dist2(t.c, b), dist2(t.c, c)}));
+  const double hu = h_upper(h, t.hc, radius);
+  t.lower = triangle_area(a, b, c) / (kSurfaceDensity * hu * hu);
+  return t;
+}
+
+/// Integral of 1 / (kSurfaceDensity h^2) over the surface: each facet is split in four while h,
+/// sampled at its centroid and corners, varies by more than 15% and its longest edge exceeds
+/// 2 h. Stops once the sum of finished parts and the lower bounds of pending ones passes `cap`.
+void integrate_surface(const SurfaceMesh& m, const SizingField& h, ResourceEstimate& e, double cap) {
+  std::vector<Tri> stack;
+  double pending = 0;  // lower bounds of the triangles on the stack
+  for (std::size_t f = 0; f < m.num_tris(); ++f) {
+    stack.push_back(make_tri(m.points.p(m.tri(f)[0]), m.points.p(m.tri(f)[1]), m.points.p(m.tri(f)[2]), h, e));
+    pending += stack.back().lower;
+    while (!stack.empty()) {
+      if (e.surface_nodes + pending > cap) {
+        e.surface_nodes += pending;
+        e.capped = true;
+        return;
+      }
+      const Tri x = stack.back();
+      stack.pop_back();
+      pending -= x.lower;
+      double hlo = x.hc, hhi = x.hc;
+      for (const double* p : x.p) {
+        const double hp = h(p);
+        hlo = std::min(hlo, hp);
+        hhi = std::max(hhi, hp);
+      }
+      e.samples += 3;
+      const double longest2 =
+          std::max({dist2(x.p[0], x.p[1]), dist2(x.p[1], x.p[2]), dist2(x.p[2], x.p[0])});
+      if (hhi <= 1.15 * hlo || longest2 <= 4 * hlo * hlo) {
+        e.surface_nodes += triangle_area(x.p[0], x.p[1], x.p[2]) / (kSurfaceDensity * x.hc * x.hc);
+        continue;
+      }
+      double mid[3][3];
+      for (int k = 0; k < 3; ++k)
+        for (int i = 0; i < 3; ++i) mid[k][i] = 0.5 * (x.p[k][i] + x.p[(k + 1) % 3][i]);
+      for (const Tri& y : {make_tri(x.p[0], mid[0], mid[2], h, e), make_tri(mid[0], x.p[1], mid[1], h, e),
+                           make_tri(mid[2], mid[1], x.p[2], h, e), make_tri(mid[0], mid[1], mid[2], h, e)}) {
+        stack.push_back(y);
+        pending += y.lower;
+      }
+    }
+  }
+}
+
+struct Cell {
+  double c[3];
+  double r;        ///< half edge
+  double hc;       ///< h at the centre
+  double sd;       ///< signed surface distance of the centre (> 0 inside)
+  double lower;    ///< lower bound of its node count (0 unless wholly inside)
+};
+
+/// A cell centred at c with half edge r. `parent_sd` is a lower bound of the centre's |signed
+/// distance| with its sign when the parent cell lay wholly on one side (then the child does
+/// too, and the surface is not queried), NaN otherwise.
+Cell make_cell(const double* c, double r, double parent_sd, const SurfaceQuery& q, const SizingField& h,
+               ResourceEstimate& e) {
+  Cell x{{c[0], c[1], c[2]}, r, h(x.c), parent_sd, 0};
+  const double rho = r * std::sqrt(3.0);
+  ++e.samples;
+  if (std::isnan(parent_sd)) {
+    const double d = q.distance(x.c);
+    x.sd = q.side(x.c) > 0 ? d : -d;
+    e.samples += 2;
+  }
+  if (x.sd >= rho) {
+    const double hu = h_upper(h, x.hc, rho);
+    x.lower = 8 * r * r * r / (kVolumeDensity * hu * hu * hu);
+  }
+  return x;
+}
+
+/// Integral of 1 / (kVolumeDensity h^3) over the solid, on an adaptive octree of its bounding
+/// cube. A cell is final when h, sampled at its centre and 8 corners, varies by at most 15%
+/// and the cell is wholly inside or outside (surface distance from the centre >= its half
+/// diagonal) or no larger than 4 h, or when it is no larger than 1.5 h (half diagonals). A
+/// final cell the surface crosses counts the fraction clamp(1/2 + sd / (2r)) of its volume,
+/// sd the centre's signed distance (exact for a plane parallel to a cell face). Stops like integrate_surface once past `cap`.
+void integrate_volume(const PreparedSurface& s, const SurfaceQuery& q, const SizingField& h,
+                      ResourceEstimate& e, double cap) {
+  double edge = 0, centre[3];
+  for (int i = 0; i < 3; ++i) {
+    edge = std::max(edge, s.bbox_max[i] - s.bbox_min[i]);
+    centre[i] = 0.5 * (s.bbox_min[i] + s.bbox_max[i]);
+  }
+  if (!(edge > 0)) return;
+  const double unknown = std::numeric_limits<double>::quiet_NaN();
+  std::vector<Cell> stack{make_cell(centre, 0.5 * edge * 1.0001, unknown, q, h, e)};
+  double pending = stack.back().lower;
+  while (!stack.empty()) {
+    if (e.interior_nodes + pending > cap) {
+      e.interior_nodes += pending;
+      e.capped = true;
+      return;
+    }
+    const Cell x = stack.back();
+    stack.pop_back();
+    pending -= x.lower;
+    const double rho = x.r * std::sqrt(3.0);
+    if (x.sd <= -rho) continue;  // wholly outside
+    double hlo = x.hc, hhi = x.hc;
+    for (int k = 0; k < 8; ++k) {
+      const double p[3] = {x.c[0] + ((k & 1) ? x.r : -x.r), x.c[1] + ((k & 2) ? x.r : -x.r),
+                           x.c[2] + ((k & 4) ? x.r : -x.r)};
+      const double hp = h(p);
+      hlo = std::min(hlo, hp);
+      hhi = std::max(hhi, hp);
+    }
+    e.samples += 8;
+    const bool crossed = x.sd < rho;
+    const bool uniform = hhi <= 1.15 * hlo;
+    if ((uniform && (!crossed || rho <= 4 * hlo)) || rho <= 1.5 * hlo) {
+      const double fraction = std::clamp(0.5 + x.sd / (2 * x.r), 0.0, 1.0);
+      e.interior_nodes += fraction * 8 * x.r * x.r * x.r / (kVolumeDensity * x.hc * x.hc * x.hc);
+      continue;
+    }
+    const double r = 0.5 * x.r;
+    // A child centre is rho / 2 from ours: a parent wholly on one side bounds the children's
+    // signed distances by |sd| - rho / 2 >= their own half diagonal rho / 2.
+    const double child_sd = crossed ? unknown : x.sd > 0 ? x.sd - 0.5 * rho : x.sd + 0.5 * rho;
+    for (int k = 0; k < 8; ++k) {
+      const double c[3] = {x.c[0] + ((k & 1) ? r : -r), x.c[1] + ((k & 2) ? r : -r), x.c[2] + ((k & 4) ? r : -r)};
+      stack.push_back(make_cell(c, r, child_sd, q, h, e));
+      pending += stack.back().lower;
+    }
+  }
+}
+
+}  // namespace
+
+ResourceEstimate estimate_resources(const PreparedSurface& surface, const SurfaceQuery& query,
+                                    const SizingField& sizing, double node_cap) {
+  ResourceEstimate e;
+  integrate_surface(surface.mesh, sizing, e, node_cap);
+  if (!e.capped) integrate_volume(surface, query, sizing, e, node_cap - e.surface_nodes);
+  e.nodes = e.surface_nodes + e.interior_nodes;
+  e.peak_bytes = kBaseBytes + kBytesPerNode * e.nodes + kBytesPerFacet * double(surface.mesh.num_tris());
+  return e;
+}
+
+std::string format_bytes(double bytes) {
+  const char* units[] = {"bytes", "kB", "MB", "GB", "TB", "PB"};
+  int u = 0;
+  while (bytes >= 1000 && u < 5) {
+    bytes /= 1000;
+    ++u;
+  }
+  char buf[64];
+  std::snprintf(buf, sizeof buf, u == 0 ? "%.0f %s" : "%.3g %s", bytes, units[u]);
+  return buf;
+}
+
+double parse_memory_amount(const std::string& text, const std::string& what) {
+  if (text == "none") return -1;
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  std::string unit = text.substr(used);
+  for (char& ch : unit) ch = char(std::toupper(static_cast<unsigned char>(ch)));
+  if (unit.size() == 2 && unit[1] == 'B') unit.pop_back();
+  double mult = 0;
+  if (unit.empty() || unit == "B") mult = 1;
+  else if (unit == "K") mult = 1e3;
+  else if (unit == "M") mult = 1e6;
+  else if (unit == "G") mult = 1e9;
+  else if (unit == "T") mult = 1e12;
+  if (used == 0 || mult == 0 || !(v > 0) || !std::isfinite(v))
+    throw UsageError(what + ": '" + text + "' is not a memory amount (e.g. 8G, 512M, 2.5GB, none)");
+  return v * mult;
+}
+
+double physical_memory_bytes() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? double(pages) * double(page) : 0;
+}
+
+}  // namespace kdmesh
