@@ -64,10 +64,10 @@ std::string list_facets(const std::vector<std::uint32_t>& facets) {
   return s;
 }
 
-[[noreturn]] void fail(const std::string& source, const std::string& what,
-                       std::vector<std::uint32_t> facets) {
+[[noreturn]] void fail(const std::string& source, const std::string& what, std::vector<std::uint32_t> facets,
+                       SurfaceError::Defect defect = SurfaceError::Defect::other) {
   if (facets.size() > kMaxNamed) facets.resize(kMaxNamed);
-  throw SurfaceError(source + ": " + what, std::move(facets));
+  throw SurfaceError(source + ": " + what, std::move(facets), defect);
 }
 
 struct UnionFind {
@@ -163,7 +163,7 @@ PreparedSurface prepare_surface(SurfaceMesh mesh, const std::string& source,
         what += (i ? "; " : "") + std::string("facet ") + std::to_string(bad[i]) + " " +
                 coords(pts, t[0]) + " " + coords(pts, t[1]) + " " + coords(pts, t[2]);
       }
-      fail(source, what + "; " + list_facets(bad), bad);
+      fail(source, what + "; " + list_facets(bad), bad, SurfaceError::Defect::degenerate);
     }
   }
 
@@ -198,7 +198,7 @@ PreparedSurface prepare_surface(SurfaceMesh mesh, const std::string& source,
       fail(source, "duplicated facets: " + std::to_string(groups) +
                        " group(s) of facets with the same 3 points, " + std::to_string(bad.size()) +
                        " facets in all: " + list_facets(bad),
-           bad);
+           bad, SurfaceError::Defect::duplicates);
     }
   }
 
@@ -399,7 +399,7 @@ PreparedSurface prepare_surface(SurfaceMesh mesh, const std::string& source,
       fail(source, "inconsistent orientation: " + std::to_string(total) +
                        " facet(s) face the opposite way from the rest of their shell (" + shells_text +
                        "), they share edges traversed in the same direction: " + list_facets(bad),
-           bad);
+           bad, SurfaceError::Defect::orientation);
   }
 
   // ---- self-intersections (CGAL PMP; facets sharing an edge or a vertex do not count) ----

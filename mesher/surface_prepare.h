@@ -38,12 +38,16 @@ struct SurfaceOptions {
 /// offending facets (0-based ids, as in the file) or edges (point ids and coordinates).
 class SurfaceError : public GeometryError {
  public:
-  SurfaceError(const std::string& msg, std::vector<std::uint32_t> facets)
-      : GeometryError(msg), facets_(std::move(facets)) {}
+  /// The defects an opt-in repair (mesher/surface_repair.h) can fix, and the rest.
+  enum class Defect { degenerate, duplicates, orientation, other };
+  SurfaceError(const std::string& msg, std::vector<std::uint32_t> facets, Defect defect = Defect::other)
+      : GeometryError(msg), facets_(std::move(facets)), defect_(defect) {}
   const std::vector<std::uint32_t>& facets() const { return facets_; }
+  Defect defect() const { return defect_; }
 
  private:
   std::vector<std::uint32_t> facets_;
+  Defect defect_;
 };
 
 /// Validates `mesh` (read from `source`, used in messages) and orients it:

@@ -252,6 +252,20 @@ jobs:
   EXPECT_TRUE(contains(e.what(), "'8Q' is not a memory amount")) << e.what();
 }
 
+TEST(JobConfig, Repair) {
+  const fs::path file = write_batch("jobs:\n  - name: a\n    input: parts/block.stl\n    size: 1\n"
+                                    "    repair: [degenerate, orientation]\n");
+  const kdmesh::BatchConfig c = kdmesh::load_batch_config(file.string());
+  ASSERT_EQ(c.jobs.size(), 1u);
+  EXPECT_TRUE(c.jobs[0].repair.degenerate && c.jobs[0].repair.orientation && !c.jobs[0].repair.duplicates);
+  const InputError e = load_error("jobs:\n  - name: a\n    input: parts/block.stl\n    size: 1\n"
+                                  "    repair: [duplicates,\n      orient]\n");
+  EXPECT_EQ(e.line(), 6u);
+  EXPECT_TRUE(contains(e.what(), "unknown repair 'orient'")) << e.what();
+  EXPECT_TRUE(contains(load_error("jobs:\n  - name: a\n    input: parts/block.stl\n    size: 1\n    repair: all\n").what(),
+                       "expected a list"));
+}
+
 TEST(JobConfig, BadZoneTypeAndOrder) {
   const InputError e = load_error(R"(jobs:
   - name: a

@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "mesher/order.h"
 #include "mesher/resource_estimate.h"
+#include "mesher/surface_repair.h"
 #include "tools/kdmesh/cli.h"
 #include "tools/lib/mesh_job.h"
 
@@ -31,6 +32,7 @@ struct Options {
   std::uint64_t seed = 1;
   std::vector<std::string> checks;
   std::string max_memory;   ///< empty: the machine's memory
+  std::string repair;       ///< comma-separated opt-in repairs
   std::string output, summary, nodes;
   Output out;
 };
@@ -64,6 +66,7 @@ MeshJob make_job(const Options& o) {
     if (c == "delaunay") job.check_delaunay = true;
   }
   if (!o.max_memory.empty()) job.max_memory = parse_memory_amount(o.max_memory, "--max-memory");
+  job.repair = parse_surface_repairs(o.repair, "--repair");
   job.vtu = o.output;
   job.summary = o.summary;
   job.nodes = o.nodes;
@@ -135,6 +138,10 @@ void add_mesh_command(CLI::App& app, Runner& run) {
   cmd->add_option("--max-memory", o->max_memory,
                   "Refuse the job (exit 7) if its estimated peak memory exceeds this, e.g. 8G, "
                   "512M, none (default: the machine's memory)");
+  cmd->add_option("--repair", o->repair,
+                  "Opt-in safe surface repairs, comma-separated: degenerate (zero-area facets), "
+                  "duplicates (same-orientation copies), orientation (flip facets against their "
+                  "shell), all; each change is reported");
   cmd->add_option("-o,--output", o->output, "Output mesh (.vtu)");
   cmd->add_option("--summary", o->summary, "Output summary (.json)");
   cmd->add_option("--nodes", o->nodes, "Output nodes (.xyz)");

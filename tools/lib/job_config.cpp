@@ -17,6 +17,7 @@
 
 #include "core/error.h"
 #include "mesher/resource_estimate.h"
+#include "mesher/surface_repair.h"
 
 namespace kdmesh {
 
@@ -54,7 +55,7 @@ namespace {
 const std::vector<std::string> kTopKeys = {"defaults", "jobs"};
 const std::vector<std::string> kJobKeys = {"name",        "input", "scale", "size",  "min_size",
                                            "gradation",   "sharp_angle",    "zones", "order",
-                                           "seed",        "check", "max_memory", "output"};
+                                           "seed",        "check", "max_memory", "repair", "output"};
 const std::vector<std::string> kZoneTypes = {"sharp_edges", "polyline", "segment", "plane",
                                              "point",       "box",      "ball"};
 const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes"};
@@ -319,6 +320,23 @@ class Loader {
           const std::string near = closest_match(name, kChecks);
           fail(c[i], key("check") + ": unknown check " + describe(c[i]) +
                          (near.empty() ? "" : " (did you mean '" + near + "'?)") + "; valid checks: " + join(kChecks));
+        }
+      }
+    }
+    if (e.count("repair")) {
+      const YAML::Node c = e.at("repair").value;
+      if (!c.IsSequence())
+        fail(c, key("repair") + ": expected a list of degenerate, duplicates, orientation, got " + describe(c));
+      job.repair = {};
+      for (std::size_t i = 0; i < c.size(); ++i) {
+        const std::string name = c[i].IsScalar() ? c[i].Scalar() : std::string();
+        try {
+          const SurfaceRepairOptions one = parse_surface_repairs(name, key("repair"));
+          job.repair.degenerate |= one.degenerate;
+          job.repair.duplicates |= one.duplicates;
+          job.repair.orientation |= one.orientation;
+        } catch (const UsageError& err) {
+          fail(c[i], err.what());
         }
       }
     }

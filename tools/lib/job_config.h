@@ -35,6 +35,7 @@ namespace kdmesh {
 ///     check        optional list of: tetgen, delaunay
 ///     max_memory   optional memory limit, e.g. 8G, 512M, none (default: the machine's memory);
 ///                  a job whose estimated peak memory exceeds it fails with exit 7 before placement
+///     repair       optional list of opt-in surface repairs: degenerate, duplicates, orientation, all
 ///     output       optional mapping {vtu, summary, nodes}: paths relative to out_dir
 ///
 /// Every error is an InputError naming the file, the 1-based line and the key at fault:

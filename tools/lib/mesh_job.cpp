@@ -24,6 +24,7 @@
 #include "mesher/size_fidelity.h"
 #include "mesher/surface_prepare.h"
 #include "mesher/surface_query.h"
+#include "mesher/surface_repair.h"
 #include "mesher/tet_compare.h"
 #include "mesher/volume_mesh.h"
 #include "sizing/features.h"
@@ -194,6 +195,25 @@ void make_parent_dirs(const std::string& path) {
   if (ec) throw OutputError(path, "cannot create directory '" + parent.string() + "': " + ec.message());
 }
 
+/// prepare_surface, with a hint in the error when an opt-in repair would fix the defect.
+PreparedSurface prepare_with_hint(SurfaceMesh raw, const MeshJob& job, const SurfaceOptions& so) {
+  try {
+    return prepare_surface(std::move(raw), job.input, so);
+  } catch (const SurfaceError& e) {
+    const char* repair = nullptr;
+    switch (e.defect()) {
+      case SurfaceError::Defect::degenerate: repair = job.repair.degenerate ? nullptr : "degenerate"; break;
+      case SurfaceError::Defect::duplicates: repair = job.repair.duplicates ? nullptr : "duplicates"; break;
+      case SurfaceError::Defect::orientation: repair = job.repair.orientation ? nullptr : "orientation"; break;
+      case SurfaceError::Defect::other: break;
+    }
+    if (!repair) throw;
+    throw SurfaceError(std::string(e.what()) + " (the opt-in repair '--repair " + repair + "', or 'repair: [" +
+                           repair + "]' in a batch file, fixes this)",
+                       e.facets(), e.defect());
+  }
+}
+
 /// Estimates the job's nodes and peak memory, reports them, and refuses the job (ResourceError)
 /// when the estimate exceeds its memory limit — before anything large is allocated.
 template <class Log>
@@ -246,7 +266,15 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
     j["notices"].push_back(n);
     log("notice: " + n);
   };
-  const PreparedSurface surface = prepare_surface(std::move(raw), job.input, so);
+  if (job.repair.any()) {
+    SurfaceRepairReport rep;
+    raw = repair_surface(std::move(raw), job.repair, rep);
+    j["repairs"] = {{"removed_collapsed", rep.removed_collapsed}, {"split_caps", rep.split_caps},
+                    {"removed_duplicates", rep.removed_duplicates}, {"flipped", rep.flipped}};
+    for (const std::string& n : rep.notes) so.notice(n);
+    if (rep.changed()) so.notice("facet ids in later messages refer to the repaired surface");
+  }
+  const PreparedSurface surface = prepare_with_hint(std::move(raw), job, so);
   sec["prepare"] = clock.seconds();
   counts["surface_points"] = surface.mesh.points.size();
   counts["surface_facets"] = surface.mesh.num_tris();

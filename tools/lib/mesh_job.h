@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "mesher/order.h"
+#include "mesher/surface_repair.h"
 #include "sizing/sizing_field.h"
 
 namespace kdmesh {
@@ -30,6 +31,7 @@ struct MeshJob {
   /// Memory limit in bytes: the job is refused (ResourceError, exit 7) before node placement
   /// when its estimated peak memory exceeds it. 0 = the machine's physical memory; < 0 = none.
   double max_memory = 0;
+  SurfaceRepairOptions repair; ///< opt-in safe surface repairs, reported as notices
   std::string vtu, summary, nodes;  ///< output paths (usable as is); empty = not written
 };
 
