@@ -5,6 +5,7 @@
 #   bash tools/setup.sh test    install + build + run the whole test suite (README command 2)
 #   bash tools/setup.sh sanitize  install + build with ASan/UBSan (CMake preset "sanitize") + run all tests
 #   bash tools/setup.sh fuzz    install + run each libFuzzer target FUZZ_SECONDS (default 60) s
+#   bash tools/setup.sh memcheck  install + build + valgrind memcheck of small end-to-end runs
 #   bash tools/setup.sh build   install + build only
 #   bash tools/setup.sh deps    install only
 #
@@ -21,8 +22,10 @@ JOBS="${JOBS:-$(nproc)}"
 # One package per line; keep sorted. Everything the build, the tests and the tools need.
 PACKAGES=(
   build-essential
+  calculix-ccx
   clang
   cmake
+  gmsh
   gnuplot-nox
   libbenchmark-dev
   libcgal-dev
@@ -37,8 +40,10 @@ PACKAGES=(
   libvtk9-dev
   libyaml-cpp-dev
   nlohmann-json3-dev
+  python3-meshio
   tetgen
   time
+  valgrind
 )
 
 install_deps() {
@@ -81,10 +86,14 @@ case "$goal" in
     install_deps
     bash tests/fuzz/run.sh "${FUZZ_SECONDS:-60}"
     ;;
+  memcheck)
+    install_deps; build
+    bash tools/memcheck.sh "$BUILD_DIR"
+    ;;
   demo)
     install_deps; build
     "$BUILD_DIR/kdmesh" batch models/all.yaml --jobs 2 --out-dir out
     echo "setup: wrote out/gearbox.vtu and out/block.vtu (summaries: out/*.json)"
     ;;
-  *) echo "usage: bash tools/setup.sh {demo|test|sanitize|fuzz|build|deps}" >&2; exit 2 ;;
+  *) echo "usage: bash tools/setup.sh {demo|test|sanitize|fuzz|memcheck|build|deps}" >&2; exit 2 ;;
 esac
