@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <string>
 
+#include "core/memory_amount.h"
 #include "mesher/surface_prepare.h"
 #include "mesher/surface_query.h"
 #include "sizing/sizing_field.h"
@@ -42,16 +43,5 @@ inline constexpr double kBaseBytes = 16e6;
 /// `capped` set, once the node estimate passes `node_cap` (so absurd sizes are refused fast).
 ResourceEstimate estimate_resources(const PreparedSurface& surface, const SurfaceQuery& query,
                                     const SizingField& sizing, double node_cap = 2e9);
-
-/// "1.23 GB", "456 MB", "789 kB" (decimal units).
-std::string format_bytes(double bytes);
-
-/// Parses a memory limit: a number with an optional unit k, M, G, T (decimal, optionally
-/// followed by B, case-insensitive; "8G" = 8e9 bytes), a bare byte count, or "none" (no limit,
-/// returned as -1). Throws UsageError naming `what` for anything else or for a value <= 0.
-double parse_memory_amount(const std::string& text, const std::string& what);
-
-/// The machine's physical memory in bytes (0 if unknown).
-double physical_memory_bytes();
 
 }  // namespace kdmesh

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <sstream>
 #include <tuple>
 #include <unordered_map>
 
@@ -240,22 +239,6 @@ void repair_orientation(Work& w, SurfaceRepairReport& report) {
 }
 
 }  // namespace
-
-SurfaceRepairOptions parse_surface_repairs(const std::string& list, const std::string& what) {
-  SurfaceRepairOptions o;
-  std::stringstream s(list);
-  for (std::string item; std::getline(s, item, ',');) {
-    if (item == "degenerate") o.degenerate = true;
-    else if (item == "duplicates") o.duplicates = true;
-    else if (item == "orientation") o.orientation = true;
-    else if (item == "all") o.degenerate = o.duplicates = o.orientation = true;
-    else if (item == "none") o = {};
-    else
-      throw UsageError(what + ": unknown repair '" + item +
-                       "'; valid: degenerate, duplicates, orientation, all, none");
-  }
-  return o;
-}
 
 SurfaceMesh repair_surface(SurfaceMesh mesh, const SurfaceRepairOptions& options, SurfaceRepairReport& report) {
   report = {};

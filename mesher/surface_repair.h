@@ -3,9 +3,11 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
 #include <cstddef>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "core/error.h"
 #include "core/surface_mesh.h"
 
 namespace kdmesh {
@@ -41,8 +43,22 @@ struct SurfaceRepairReport {
 };
 
 /// "degenerate,duplicates,orientation" / "all" / "none" -> options; UsageError naming `what`
-/// and the valid names otherwise.
-SurfaceRepairOptions parse_surface_repairs(const std::string& list, const std::string& what);
+/// and the valid names otherwise. (Inline: the config loader uses it without the repairs.)
+inline SurfaceRepairOptions parse_surface_repairs(const std::string& list, const std::string& what) {
+  SurfaceRepairOptions o;
+  std::stringstream s(list);
+  for (std::string item; std::getline(s, item, ',');) {
+    if (item == "degenerate") o.degenerate = true;
+    else if (item == "duplicates") o.duplicates = true;
+    else if (item == "orientation") o.orientation = true;
+    else if (item == "all") o.degenerate = o.duplicates = o.orientation = true;
+    else if (item == "none") o = {};
+    else
+      throw UsageError(what + ": unknown repair '" + item +
+                       "'; valid: degenerate, duplicates, orientation, all, none");
+  }
+  return o;
+}
 
 /// Applies the repairs `options` asks for, in the order degenerate, duplicates, orientation,
 /// and returns the repaired surface (points unchanged; facets removed, split or flipped;

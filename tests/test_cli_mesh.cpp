@@ -12,6 +12,8 @@
 #include <string>
 
 #include "core/surface_mesh.h"
+#include "io/medit_reader.h"
+#include "io/msh_reader.h"
 #include "io/surface_io.h"
 #include "tests/support/run_cli.h"
 #include "tools/lib/mesh_job.h"
@@ -104,6 +106,47 @@ TEST(CliMesh, CubeWritesVtuSummaryAndNodes) {
   EXPECT_NE(xml.find("UnstructuredGrid"), std::string::npos);
   EXPECT_NE(xml.find("node_kind"), std::string::npos);
   EXPECT_FALSE(has_temp_leftovers(dir));
+}
+
+// Solver formats from the pipeline: every patch and curve of the cube is a group
+// (--patch-groups), the elements read back from the .msh and .mesh agree with the summary, and
+// at order 2 every boundary mid-edge node of the (flat-faced) cube sits at its edge midpoint.
+TEST(CliMesh, SolverFormatsCarryTheBoundaryGroups) {
+  const fs::path stl = write_cube("cube-fe.stl", 10);
+  const fs::path dir = tmpdir() / "mesh-fe";
+  fs::remove_all(dir);
+  for (const int order : {1, 2}) {
+    const std::string o = std::to_string(order);
+    const fs::path msh = dir / ("c" + o + ".msh"), inp = dir / ("c" + o + ".inp"), mesh = dir / ("c" + o + ".mesh");
+    const CliResult r = kdmesh("mesh " + stl.string() + " --size 4 --json -q --patch-groups --element-order " + o +
+                               " --msh " + msh.string() + " --inp " + inp.string() + " --medit " + mesh.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["counts"]["patches"], 6);
+    EXPECT_EQ(j["counts"]["curves"], 12);
+    EXPECT_TRUE(j["boundary"]["pass"].get<bool>());
+    ASSERT_EQ(j["groups"].size(), 1u + 6u + 12u);  // body_1, patch_1..6, curve_1..12
+    for (const fs::path& f : {msh, mesh}) {
+      const kdmesh::FeMesh fe = f.extension() == ".msh" ? kdmesh::read_msh(f.string()) : kdmesh::read_medit(f.string());
+      EXPECT_EQ(fe.order, order) << f;
+      EXPECT_EQ(fe.num_tets(), j["counts"]["tets"].get<std::size_t>()) << f;
+      EXPECT_EQ(fe.num_faces(), j["counts"]["boundary_faces"].get<std::size_t>()) << f;
+      EXPECT_EQ(fe.num_edges(), j["counts"]["mesh_feature_edges"].get<std::size_t>()) << f;
+      if (order == 2)
+        for (std::size_t t = 0; t < fe.num_faces(); ++t) {
+          const std::uint32_t* v = &fe.faces[6 * t];
+          const int ends[3][2] = {{0, 1}, {1, 2}, {2, 0}};
+          for (int e = 0; e < 3; ++e)
+            for (int k = 0; k < 3; ++k)
+              ASSERT_NEAR(fe.points.p(v[3 + e])[k],  // to the 16 digits the text formats keep
+                          0.5 * (fe.points.p(v[ends[e][0]])[k] + fe.points.p(v[ends[e][1]])[k]), 1e-13);
+        }
+    }
+    const std::string deck = slurp(inp);
+    EXPECT_NE(deck.find(order == 1 ? "TYPE=C3D4" : "TYPE=C3D10"), std::string::npos);
+    EXPECT_NE(deck.find("*SURFACE, NAME=patch_1"), std::string::npos);
+    EXPECT_NE(deck.find("*NSET, NSET=curve_12"), std::string::npos);
+  }
 }
 
 TEST(CliMesh, DelaunayChecksOfTheNodes) {

@@ -38,6 +38,9 @@ declare -A LIBS=(
 # The surface-reader and YAML-loader targets (listed when their harness file exists).
 [ -f tests/fuzz/fuzz_stl.cpp ] && SOURCES[stl]="$IO_SURFACE" && LIBS[stl]=""
 [ -f tests/fuzz/fuzz_ply_surface.cpp ] && SOURCES[ply_surface]="$IO_SURFACE" && LIBS[ply_surface]=""
+# The solver-format readers (round trips of the writers).
+[ -f tests/fuzz/fuzz_msh.cpp ] && SOURCES[msh]="$IO_READERS" && LIBS[msh]=""
+[ -f tests/fuzz/fuzz_medit.cpp ] && SOURCES[medit]="$IO_READERS" && LIBS[medit]=""
 [ -f tests/fuzz/fuzz_config.cpp ] && SOURCES[config]="tools/lib/job_config.cpp $ORDERS" && LIBS[config]="-lyaml-cpp -lpthread"
 
 targets=("$@")

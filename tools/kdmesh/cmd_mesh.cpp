@@ -34,6 +34,10 @@ struct Options {
   std::string max_memory;   ///< empty: the machine's memory
   std::string repair;       ///< comma-separated opt-in repairs
   std::string output, summary, nodes;
+  std::string msh, inp, medit;
+  int element_order = 1;
+  std::string msh_version = "4.1";
+  bool patch_groups = false;
   Output out;
 };
 
@@ -67,6 +71,12 @@ MeshJob make_job(const Options& o) {
   }
   if (!o.max_memory.empty()) job.max_memory = parse_memory_amount(o.max_memory, "--max-memory");
   job.repair = parse_surface_repairs(o.repair, "--repair");
+  job.msh = o.msh;
+  job.inp = o.inp;
+  job.medit = o.medit;
+  job.element_order = o.element_order;
+  job.msh_version = o.msh_version == "2.2" ? 22 : 41;
+  job.group_options.patch_groups = job.group_options.curve_groups = o.patch_groups;
   job.vtu = o.output;
   job.summary = o.summary;
   job.nodes = o.nodes;
@@ -145,6 +155,18 @@ void add_mesh_command(CLI::App& app, Runner& run) {
   cmd->add_option("-o,--output", o->output, "Output mesh (.vtu)");
   cmd->add_option("--summary", o->summary, "Output summary (.json)");
   cmd->add_option("--nodes", o->nodes, "Output nodes (.xyz)");
+  cmd->add_option("--msh", o->msh, "Output Gmsh mesh (.msh) with physical groups");
+  cmd->add_option("--inp", o->inp, "Output Abaqus/CalculiX input (.inp) with ELSET/NSET/SURFACE groups");
+  cmd->add_option("--medit", o->medit, "Output MEDIT mesh (.mesh) with references");
+  cmd->add_option("--element-order", o->element_order,
+                  "1: linear tets; 2: quadratic (C3D10), mid-edge nodes on the surface")
+      ->check(CLI::IsMember({1, 2}))
+      ->capture_default_str();
+  cmd->add_option("--msh-version", o->msh_version, "MSH format version")
+      ->check(CLI::IsMember({"4.1", "2.2"}))
+      ->capture_default_str();
+  cmd->add_flag("--patch-groups", o->patch_groups,
+                "Name every surface patch and feature curve as a group (patch_<i>, curve_<i>)");
   add_output_flags(cmd, o->out);
   cmd->callback([o, &run] { run = [o] { return run_mesh(*o); }; });
 }

@@ -16,7 +16,7 @@
 #include <utility>
 
 #include "core/error.h"
-#include "mesher/resource_estimate.h"
+#include "core/memory_amount.h"
 #include "mesher/surface_repair.h"
 
 namespace kdmesh {
@@ -55,10 +55,12 @@ namespace {
 const std::vector<std::string> kTopKeys = {"defaults", "jobs"};
 const std::vector<std::string> kJobKeys = {"name",        "input", "scale", "size",  "min_size",
                                            "gradation",   "sharp_angle",    "zones", "order",
-                                           "seed",        "check", "max_memory", "repair", "output"};
+                                           "seed",        "check", "max_memory", "repair", "groups",
+                                           "patch_groups", "element_order", "msh_version", "output"};
 const std::vector<std::string> kZoneTypes = {"sharp_edges", "polyline", "segment", "plane",
                                              "point",       "box",      "ball"};
-const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes"};
+const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes", "msh", "inp", "mesh"};
+const std::vector<std::string> kGroupKeys = {"name", "dim", "zone", "point", "box"};
 const std::vector<std::string> kChecks = {"tetgen", "delaunay"};
 
 std::string join(const std::vector<std::string>& v) {
@@ -241,6 +243,45 @@ class Loader {
     return (p.is_absolute() || out_.empty() ? p : out_ / p).lexically_normal().string();
   }
 
+  /// One entry of `groups`: {name, dim?, exactly one of zone / point / box {min, max}}.
+  GroupSpec group(const YAML::Node& node, const std::string& where) const {
+    const auto e = entries(node, kGroupKeys, where);
+    GroupSpec g;
+    g.origin = file_ + ":" + std::to_string(line_of(node));
+    if (!e.count("name")) fail(node, where + ": missing required key 'name'");
+    g.name = string(e.at("name").value, where + ": key 'name'");
+    const std::string w = where + " (" + g.name + ")";
+    if (e.count("dim")) {
+      const YAML::Node v = e.at("dim").value;
+      const std::uint64_t d = unsigned_integer(v, w + ": key 'dim'");
+      if (d != 1 && d != 2) fail(v, w + ": key 'dim': must be 1 (curves) or 2 (surface patches)");
+      g.dim = int(d);
+    }
+    const int ways = int(e.count("zone")) + int(e.count("point")) + int(e.count("box"));
+    if (ways != 1) fail(node, w + ": give exactly one of 'zone', 'point' or 'box'");
+    if (e.count("zone")) {
+      g.by = GroupSpec::Select::zone;
+      g.zone = string(e.at("zone").value, w + ": key 'zone'");
+    } else if (e.count("point")) {
+      g.by = GroupSpec::Select::point;
+      std::vector<double> p;
+      vec3(e.at("point").value, w + ": key 'point'", p);
+      std::copy(p.begin(), p.end(), g.point);
+      if (g.dim == 0) g.dim = 2;
+    } else {
+      g.by = GroupSpec::Select::box;
+      const auto b = entries(e.at("box").value, {"min", "max"}, w + ": key 'box'");
+      if (!b.count("min") || !b.count("max")) fail(e.at("box").value, w + ": key 'box': needs 'min' and 'max'");
+      std::vector<double> lo, hi;
+      vec3(b.at("min").value, w + ": key 'box': key 'min'", lo);
+      vec3(b.at("max").value, w + ": key 'box': key 'max'", hi);
+      std::copy(lo.begin(), lo.end(), g.box_min);
+      std::copy(hi.begin(), hi.end(), g.box_max);
+      if (g.dim == 0) g.dim = 2;
+    }
+    return g;
+  }
+
   MeshJob job(const YAML::Node& node, const std::map<std::string, Entry>& defaults,
               std::size_t index) const {
     const std::string where0 = "jobs[" + std::to_string(index) + "]";
@@ -323,6 +364,29 @@ class Loader {
         }
       }
     }
+    if (e.count("groups")) {
+      const YAML::Node g = e.at("groups").value;
+      if (!g.IsSequence()) fail(g, key("groups") + ": expected a list, got " + describe(g));
+      for (std::size_t i = 0; i < g.size(); ++i) job.groups.push_back(group(g[i], where + ": groups[" + std::to_string(i) + "]"));
+    }
+    if (e.count("patch_groups")) {
+      const YAML::Node v = e.at("patch_groups").value;
+      if (!v.IsScalar() || (v.Scalar() != "true" && v.Scalar() != "false"))
+        fail(v, key("patch_groups") + ": expected true or false, got " + describe(v));
+      job.group_options.patch_groups = job.group_options.curve_groups = v.Scalar() == "true";
+    }
+    if (e.count("element_order")) {
+      const YAML::Node v = e.at("element_order").value;
+      const std::uint64_t n = unsigned_integer(v, key("element_order"));
+      if (n != 1 && n != 2) fail(v, key("element_order") + ": must be 1 or 2");
+      job.element_order = int(n);
+    }
+    if (e.count("msh_version")) {
+      const YAML::Node v = e.at("msh_version").value;
+      const std::string text = v.IsScalar() ? v.Scalar() : std::string();
+      if (text != "4.1" && text != "2.2") fail(v, key("msh_version") + ": must be 4.1 or 2.2, got " + describe(v));
+      job.msh_version = text == "4.1" ? 41 : 22;
+    }
     if (e.count("repair")) {
       const YAML::Node c = e.at("repair").value;
       if (!c.IsSequence())
@@ -355,6 +419,9 @@ class Loader {
       if (o.count("vtu")) job.vtu = resolve_output(o.at("vtu").value, k + ": key 'vtu'");
       if (o.count("summary")) job.summary = resolve_output(o.at("summary").value, k + ": key 'summary'");
       if (o.count("nodes")) job.nodes = resolve_output(o.at("nodes").value, k + ": key 'nodes'");
+      if (o.count("msh")) job.msh = resolve_output(o.at("msh").value, k + ": key 'msh'");
+      if (o.count("inp")) job.inp = resolve_output(o.at("inp").value, k + ": key 'inp'");
+      if (o.count("mesh")) job.medit = resolve_output(o.at("mesh").value, k + ": key 'mesh'");
     }
     return job;
   }

@@ -36,7 +36,14 @@ namespace kdmesh {
 ///     max_memory   optional memory limit, e.g. 8G, 512M, none (default: the machine's memory);
 ///                  a job whose estimated peak memory exceeds it fails with exit 7 before placement
 ///     repair       optional list of opt-in surface repairs: degenerate, duplicates, orientation, all
-///     output       optional mapping {vtu, summary, nodes}: paths relative to out_dir
+///     groups       optional list of named boundary groups for the solver formats, each
+///                    {name, dim (1 curves | 2 surface patches; default: from the zone, else 2),
+///                     exactly one of zone: <sizing zone name> | point: [x,y,z] (the nearest
+///                     patch / curve) | box: {min: [..], max: [..]} (everything inside)}
+///     patch_groups optional bool: also a group per surface patch and feature curve (default false)
+///     element_order optional 1 or 2 (C3D10 / tet10 with mid-edge nodes on the surface)
+///     msh_version  optional 4.1 (default) or 2.2
+///     output       optional mapping {vtu, summary, nodes, msh, inp, mesh}: paths relative to out_dir
 ///
 /// Every error is an InputError naming the file, the 1-based line and the key at fault:
 /// unknown keys (with the closest valid key), wrong types, missing required keys, bad values,

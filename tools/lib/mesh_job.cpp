@@ -13,10 +13,15 @@
 
 #include "core/atomic_file.h"
 #include "core/timer.h"
+#include "io/inp_writer.h"
+#include "io/medit_writer.h"
+#include "io/msh_writer.h"
 #include "io/points_io.h"
 #include "io/surface_io.h"
 #include "io/vtu_writer.h"
+#include "mesher/boundary_groups.h"
 #include "mesher/delaunay.h"
+#include "mesher/fe_assembly.h"
 #include "mesher/mesh_check.h"
 #include "mesher/node_placement.h"
 #include "mesher/quality.h"
@@ -375,6 +380,44 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
                      "': the Delaunay tetrahedralization of the nodes failed its check:\n" +
                      j["delaunay_check"]["report"].get<std::string>() + "no output was written");
 
+  // Solver formats: boundary patches and feature curves, named groups, optional quadratic nodes.
+  FeMesh fe;
+  const bool solver_formats = !job.msh.empty() || !job.inp.empty() || !job.medit.empty();
+  if (solver_formats) {
+    clock.reset();
+    log("boundary groups");
+    const SurfacePatches patches = segment_surface(surface.mesh, features);
+    const BoundaryGroups bg = assign_boundary(mesh, surface.mesh, patches, query);
+    counts["patches"] = patches.num_patches;
+    counts["curves"] = patches.num_curves();
+    counts["mesh_feature_edges"] = bg.edge_curve.size();
+    j["boundary"] = {{"pass", bg.ok()}, {"topological_faces", bg.topological_faces},
+                     {"geometric_faces", bg.geometric_faces}, {"verified_faces", bg.verified_faces},
+                     {"ambiguous_faces", bg.ambiguous_faces.size()},
+                     {"missing_curve_edges", bg.missing_curve_edges}, {"stray_patch_edges", bg.stray_patch_edges},
+                     {"empty_patches", bg.empty_patches}, {"empty_curves", bg.empty_curves},
+                     {"problems", bg.problems}};
+    if (!bg.ok()) {
+      std::string what = "job '" + job.name + "': the boundary groups are not certain:";
+      for (const std::string& p : bg.problems) what += "\n  " + p;
+      throw CheckError(what + "\nno output was written");
+    }
+    fe = make_fe_mesh(mesh, bg, make_groups(job.groups, surface.mesh, patches, job.sizing.zones,
+                                            surface.num_bodies, job.group_options));
+    nlohmann::json groups = nlohmann::json::array();
+    for (const FeGroup& g : fe.groups) groups.push_back({{"name", g.name}, {"dim", g.dim}, {"entities", g.entities.size()}});
+    j["groups"] = groups;
+    if (job.element_order == 2) {
+      log("quadratic elements");
+      const QuadraticStats qs = make_quadratic(fe, surface.mesh, query, patches);
+      j["quadratic"] = {{"mid_nodes", qs.mid_nodes}, {"moved", qs.moved_mid_nodes},
+                        {"reduced_elements", qs.reduced_elements},
+                        {"straightened_elements", qs.straightened_elements},
+                        {"far_projections", qs.far_projections}, {"min_jacobian_ratio", qs.min_jacobian_ratio}};
+    }
+    sec["groups"] = clock.seconds();
+  }
+
   // Outputs: every file to a temporary first; all renamed into place only once all are written.
   clock.reset();
   std::vector<std::unique_ptr<AtomicFile>> files;
@@ -393,6 +436,22 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
     log("writing " + job.nodes);
     write_xyz(mesh.nodes.points, open(job.nodes, "nodes"));
   }
+  if (!job.msh.empty()) {
+    log("writing " + job.msh);
+    MshOptions mo;
+    mo.version = job.msh_version;
+    write_msh(fe, open(job.msh, "msh"), mo);
+  }
+  if (!job.inp.empty()) {
+    log("writing " + job.inp);
+    InpOptions io;
+    io.heading = "kdmesh job " + job.name + " (" + job.input + ")";
+    write_inp(fe, open(job.inp, "inp"), io);
+  }
+  if (!job.medit.empty()) {
+    log("writing " + job.medit);
+    write_medit(fe, open(job.medit, "medit"));
+  }
   std::string summary_tmp;
   if (!job.summary.empty()) summary_tmp = open(job.summary, "summary");
   j["outputs"] = outputs;
@@ -410,7 +469,7 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
 
 std::vector<std::string> output_paths(const MeshJob& job) {
   std::vector<std::string> paths;
-  for (const std::string* p : {&job.vtu, &job.summary, &job.nodes})
+  for (const std::string* p : {&job.vtu, &job.summary, &job.nodes, &job.msh, &job.inp, &job.medit})
     if (!p->empty()) paths.push_back(*p);
   return paths;
 }

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "mesher/boundary_groups.h"
 #include "mesher/order.h"
 #include "mesher/surface_repair.h"
 #include "sizing/sizing_field.h"
@@ -33,6 +34,12 @@ struct MeshJob {
   double max_memory = 0;
   SurfaceRepairOptions repair; ///< opt-in safe surface repairs, reported as notices
   std::string vtu, summary, nodes;  ///< output paths (usable as is); empty = not written
+  /// Solver formats (usable as is; empty = not written): Gmsh MSH, Abaqus/CalculiX INP, MEDIT.
+  std::string msh, inp, medit;
+  int msh_version = 41;        ///< 41 or 22
+  int element_order = 1;       ///< 1 (C3D4 / tet4) or 2 (C3D10 / tet10) in the solver formats
+  std::vector<GroupSpec> groups;  ///< named boundary groups (mesher/boundary_groups.h)
+  GroupOptions group_options;     ///< automatic patch_<i> / curve_<i> groups
 };
 
 /// Every output path the job writes (the non-empty ones), e.g. to clean up after a crash.
