@@ -1,0 +1,118 @@
+// kdmesh — edge removal and face removal (mesher/improve_flips.h).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/improve_flips.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "mesher/improve_quality.h"
+
+namespace kdmesh {
+
+double sine_of(const ImproveTets& m, std::uint32_t t) {
+  const std::uint32_t* v = m.v(t);
+  return tet_sine(m.p(v[0]), m.p(v[1]), m.p(v[2]), m.p(v[3]));
+}
+
+double min_sine(const ImproveTets& m, const std::vector<std::uint32_t>& ids) {
+  double q = std::numeric_limits<double>::infinity();
+  for (std::uint32_t t : ids) q = std::min(q, sine_of(m, t));
+  return q;
+}
+
+namespace {
+
+bool all_valid(const ImproveTets& m, const std::vector<std::uint32_t>& fresh) {
+  for (std::size_t k = 0; k < fresh.size(); k += 4)
+    if (!tet_valid(m.p(fresh[k]), m.p(fresh[k + 1]), m.p(fresh[k + 2]), m.p(fresh[k + 3])))
+      return false;
+  return true;
+}
+
+}  // namespace
+
+bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::uint32_t b,
+                  int max_ring, FlipCandidate& out, double floor) {
+  static thread_local std::vector<std::uint32_t> ring;
+  out.old.clear();
+  out.fresh.clear();
+  out.q_new = -1;
+  if (!m.edge_ring(t, a, b, ring, out.old)) return false;
+  const int n = int(ring.size());
+  if (n < 3 || n > max_ring) return false;
+  out.q_old = min_sine(m, out.old);
+  // Only triangulations better than `floor` and than the ring's own tets are of interest:
+  // sub-polygons that cannot beat it are cut off (-inf) without evaluating their tets.
+  const double cut = std::max(floor, out.q_old);
+  // Triangle (r_i, r_k, r_j), i < k < j, of the ring polygon: the tets (r_i r_j r_k a) and
+  // (r_i r_k r_j b). With the ring ordered so that (a, b, r_i, r_{i+1}) is positive, the ring
+  // turns clockwise seen from a, so those two are the positive orders (checked exactly below).
+  constexpr int kMax = 16;
+  if (n > kMax) return false;
+  double best[kMax][kMax];
+  int arg[kMax][kMax];
+  const double inf = std::numeric_limits<double>::infinity();
+  const double* pa = m.p(a);
+  const double* pb = m.p(b);
+  auto tri_q = [&](int i, int k, int j) {
+    const double *ri = m.p(ring[i]), *rk = m.p(ring[k]), *rj = m.p(ring[j]);
+    return std::min(tet_sine(ri, rj, rk, pa), tet_sine(ri, rk, rj, pb));
+  };
+  for (int i = 0; i + 1 < n; ++i) best[i][i + 1] = inf;
+  for (int len = 2; len < n; ++len)
+    for (int i = 0; i + len < n; ++i) {
+      const int j = i + len;
+      double bq = cut;
+      int bk = -1;
+      for (int k = i + 1; k < j; ++k) {
+        double q = std::min(best[i][k], best[k][j]);
+        if (q <= bq) continue;  // this split cannot beat the best one
+        q = std::min(q, tri_q(i, k, j));
+        if (q > bq) bq = q, bk = k;
+      }
+      best[i][j] = bk >= 0 ? bq : -inf;
+      arg[i][j] = bk;
+    }
+  out.q_new = best[0][n - 1];
+  if (arg[0][n - 1] < 0 || !(out.q_new > 0)) return false;
+  // Reconstruct.
+  int stack[2 * kMax][2], sp = 0;
+  stack[sp][0] = 0, stack[sp][1] = n - 1, ++sp;
+  while (sp > 0) {
+    --sp;
+    const int i = stack[sp][0], j = stack[sp][1];
+    if (j - i < 2) continue;
+    const int k = arg[i][j];
+    out.fresh.insert(out.fresh.end(), {ring[i], ring[j], ring[k], a, ring[i], ring[k], ring[j], b});
+    stack[sp][0] = i, stack[sp][1] = k, ++sp;
+    stack[sp][0] = k, stack[sp][1] = j, ++sp;
+  }
+  return all_valid(m, out.fresh);
+}
+
+bool face_removal(const ImproveTets& m, std::uint32_t t, int i, FlipCandidate& out) {
+  out.old.clear();
+  out.fresh.clear();
+  out.q_new = -1;
+  const std::uint32_t r = m.adj(t, i);
+  if (r == kImproveNone) return false;
+  static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  const std::uint32_t* v = m.v(t);
+  const std::uint32_t u = r >> 2;
+  const std::uint32_t p = v[i], q = m.v(u)[r & 3];
+  // kFace is outward from t (p on its negative side); reversed, p is on the positive side.
+  const std::uint32_t x = v[kFace[i][0]], y = v[kFace[i][2]], z = v[kFace[i][1]];
+  out.old = {t, u};
+  out.q_old = std::min(sine_of(m, t), sine_of(m, u));
+  out.fresh = {x, y, q, p, y, z, q, p, z, x, q, p};
+  double qn = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < out.fresh.size(); k += 4)
+    qn = std::min(qn, tet_sine(m.p(out.fresh[k]), m.p(out.fresh[k + 1]), m.p(out.fresh[k + 2]),
+                               m.p(out.fresh[k + 3])));
+  out.q_new = qn;
+  if (!(qn > 0)) return false;
+  return all_valid(m, out.fresh);
+}
+
+}  // namespace kdmesh

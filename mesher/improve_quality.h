@@ -1,0 +1,87 @@
+// kdmesh — the objective of the quality-improvement pass: the smallest sine of a tet's six
+// dihedral angles (small for both sliver-flat and needle-obtuse angles), and the validity test
+// every new or moved tet passes.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "mesher/predicates.h"
+#include "mesher/quality.h"
+
+namespace kdmesh {
+
+/// min over the six edges of sin(dihedral angle), for the tet (a, b, c, d): in (0, 0.943]
+/// (0.943 = sin 70.5 deg, the regular tet) when positively oriented in floating point, -1
+/// otherwise. sin(theta_ij) = 6V |e_ij| / (|n_k| |n_l|), n_k, n_l the (unnormalised) normals
+/// of the two faces at edge ij. Both min dihedral >= 12 deg and max dihedral <= 165 deg hold
+/// when it is >= sin 15 deg.
+inline double tet_sine(const double* a, const double* b, const double* c, const double* d) {
+  auto sub = [](const double* p, const double* q, double* r) {
+    r[0] = p[0] - q[0], r[1] = p[1] - q[1], r[2] = p[2] - q[2];
+  };
+  auto cross = [](const double* u, const double* w, double* r) {
+    r[0] = u[1] * w[2] - u[2] * w[1], r[1] = u[2] * w[0] - u[0] * w[2], r[2] = u[0] * w[1] - u[1] * w[0];
+  };
+  auto len = [](const double* u) { return std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]); };
+  double ab[3], ac[3], ad[3], bc[3], bd[3], cd[3];
+  sub(b, a, ab), sub(c, a, ac), sub(d, a, ad), sub(c, b, bc), sub(d, b, bd), sub(d, c, cd);
+  double n[3];
+  cross(ac, ad, n);
+  const double det = ab[0] * n[0] + ab[1] * n[1] + ab[2] * n[2];
+  if (!(det > 0)) return -1;
+  const double N3 = len(n);  // face a c d: opposite b -> call it N_b
+  cross(bc, bd, n);
+  const double Na = len(n);
+  cross(ab, ad, n);
+  const double Nc = len(n);
+  cross(ab, ac, n);
+  const double Nd = len(n);
+  const double Nb = N3;
+  // Edge ij lies on the faces opposite the two other vertices.
+  const double m = std::min({len(ab) * Na * Nb, len(ac) * Na * Nc, len(ad) * Na * Nd,
+                             len(bc) * Nb * Nc, len(bd) * Nb * Nd, len(cd) * Nc * Nd});
+  const double prod = Na * Nb * Nc * Nd;
+  return prod > 0 ? det * m / prod : -1;
+}
+
+/// Radius ratio 3 r_in / R_circ (1 regular, 0 flat; <= 0 if not positive in floating point),
+/// without the angles tet_quality also computes.
+inline double tet_radius_ratio(const double* a, const double* b, const double* c, const double* d) {
+  const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const double e3[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+  auto cross = [](const double* u, const double* w, double* r) {
+    r[0] = u[1] * w[2] - u[2] * w[1], r[1] = u[2] * w[0] - u[0] * w[2], r[2] = u[0] * w[1] - u[1] * w[0];
+  };
+  auto len = [](const double* u) { return std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]); };
+  double c23[3], c31[3], c12[3];
+  cross(e2, e3, c23), cross(e3, e1, c31), cross(e1, e2, c12);
+  const double det = e1[0] * c23[0] + e1[1] * c23[1] + e1[2] * c23[2];  // 6 V
+  if (!(det > 0)) return 0;
+  const double s1 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
+  const double s2 = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2];
+  const double s3 = e3[0] * e3[0] + e3[1] * e3[1] + e3[2] * e3[2];
+  double off[3];
+  for (int k = 0; k < 3; ++k) off[k] = (s1 * c23[k] + s2 * c31[k] + s3 * c12[k]) / (2 * det);
+  const double R = len(off);
+  // Face areas x2: the three at a are |c12|, |c23|, |c31|; the fourth is |(c-b) x (d-b)|.
+  const double f[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]}, g[3] = {d[0] - b[0], d[1] - b[1], d[2] - b[2]};
+  double c4[3];
+  cross(f, g, c4);
+  const double area2 = len(c12) + len(c23) + len(c31) + len(c4);
+  // r_in = 3V / A = (det / 2) / (area2 / 2) = det / area2.
+  return 3 * (det / area2) / R;
+}
+
+inline double tet_sine(const double* const* p) { return tet_sine(p[0], p[1], p[2], p[3]); }
+
+/// A tet the pass may create: exactly positively oriented and not flat at rounding level.
+inline bool tet_valid(const double* a, const double* b, const double* c, const double* d) {
+  return pred::orient3d(a, b, c, d) > 0 && volume_length(a, b, c, d) >= kZeroVolumeLength;
+}
+
+inline double deg_to_sine(double deg) { return std::sin(deg * 3.14159265358979323846 / 180); }
+
+}  // namespace kdmesh

@@ -1,0 +1,300 @@
+// kdmesh — vertex smoothing of the quality-improvement pass (mesher/improve_smooth.h).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/improve_smooth.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "mesher/improve_quality.h"
+
+namespace kdmesh {
+
+namespace {
+
+constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+void tri_normal(const double* a, const double* b, const double* c, double* n) {
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  n[0] = u[1] * w[2] - u[2] * w[1];
+  n[1] = u[2] * w[0] - u[0] * w[2];
+  n[2] = u[0] * w[1] - u[1] * w[0];
+}
+
+struct StarTet {
+  const double* p[4];
+  int iv;  // position of the moving vertex
+};
+
+/// Min-norm point of the convex hull of `g` (Gilbert's algorithm; a few dozen steps suffice
+/// for a direction).
+std::array<double, 3> min_norm_point(const std::vector<std::array<double, 3>>& g) {
+  std::array<double, 3> d = g[0];
+  for (int it = 0; it < 40; ++it) {
+    const double dd = dot3(d.data(), d.data());
+    std::size_t jmin = 0;
+    double smin = std::numeric_limits<double>::infinity();
+    for (std::size_t j = 0; j < g.size(); ++j) {
+      const double s = dot3(g[j].data(), d.data());
+      if (s < smin) smin = s, jmin = j;
+    }
+    if (smin >= dd * (1 - 1e-9)) break;
+    const double e[3] = {g[jmin][0] - d[0], g[jmin][1] - d[1], g[jmin][2] - d[2]};
+    const double ee = dot3(e, e);
+    if (ee <= 0) break;
+    const double lam = std::clamp(-dot3(d.data(), e) / ee, 0.0, 1.0);
+    for (int k = 0; k < 3; ++k) d[k] += lam * e[k];
+  }
+  return d;
+}
+
+/// The star of one vertex with what a move must respect.
+class VertexStar {
+ public:
+  /// False if v may not move (a feature node, a surface node off a planar fan, ...).
+  bool load(const ImproveTets& m, std::uint32_t v, const SmoothContext& ctx) {
+    m_ = &m;
+    v_ = v;
+    ctx_ = &ctx;
+    const NodeKind kind = m.nodes().kind[v];
+    on_surface_ = kind != NodeKind::interior;
+    if (on_surface_ && (kind != NodeKind::surface || !ctx.surface || !ctx.query)) return false;
+    m.star(v, star_);
+    if (star_.empty()) return false;
+    st_.clear();
+    bfaces_.clear();
+    bnormal_.clear();
+    link_.clear();
+    for (std::uint32_t t : star_) {
+      const std::uint32_t* tv = m.v(t);
+      StarTet s;
+      for (int k = 0; k < 4; ++k) s.p[k] = m.p(tv[k]);
+      s.iv = index_in(tv, v);
+      st_.push_back(s);
+      for (int k = 0; k < 4; ++k) {
+        if (k == s.iv) continue;
+        link_.push_back(tv[k]);
+        if (m.adj(t, k) == kImproveNone) {  // a boundary face holding v
+          bfaces_.push_back({tv[kFace[k][0]], tv[kFace[k][1]], tv[kFace[k][2]]});
+          std::array<double, 3> n;
+          tri_normal(m.p(bfaces_.back()[0]), m.p(bfaces_.back()[1]), m.p(bfaces_.back()[2]), n.data());
+          bnormal_.push_back(n);
+        }
+      }
+    }
+    std::sort(link_.begin(), link_.end());
+    link_.erase(std::unique(link_.begin(), link_.end()), link_.end());
+    if (!on_surface_) return bfaces_.empty();
+    if (bfaces_.empty()) return false;
+    facet_ = m.nodes().facet[v];
+    const SurfaceMesh& sm = ctx.surface->mesh;
+    if (facet_ == kNoFacet || facet_ >= sm.num_tris()) return false;
+    for (int j = 0; j < 3; ++j) fp_[j] = sm.points.p(sm.tris[3 * std::size_t(facet_) + j]);
+    tri_normal(fp_[0], fp_[1], fp_[2], n_);
+    const double nl = std::sqrt(dot3(n_, n_));
+    if (!(nl > 0)) return false;
+    for (double& c : n_) c /= nl;
+    // Every boundary face at v must lie in the facet's plane.
+    for (const auto& bf : bfaces_)
+      for (std::uint32_t w : bf)
+        if (std::fabs(plane_offset(m.p(w))) > ctx.on_surface) return false;
+    return true;
+  }
+
+  /// Mean length of the edges at v.
+  double mean_edge(const ImproveTets& m) const {
+    const double* x0 = m.p(v_);
+    double sum = 0;
+    for (std::uint32_t w : link_) {
+      const double* q = m.p(w);
+      sum += std::sqrt((q[0] - x0[0]) * (q[0] - x0[0]) + (q[1] - x0[1]) * (q[1] - x0[1]) +
+                       (q[2] - x0[2]) * (q[2] - x0[2]));
+    }
+    return link_.empty() ? 0 : sum / double(link_.size());
+  }
+  bool on_surface() const { return on_surface_; }
+  const std::vector<std::uint32_t>& link() const { return link_; }
+  std::size_t size() const { return st_.size(); }
+
+  double eval_tet(std::size_t j, const double* x) const {
+    const StarTet& s = st_[j];
+    const double* p[4] = {s.p[0], s.p[1], s.p[2], s.p[3]};
+    p[s.iv] = x;
+    return tet_sine(p);
+  }
+  double eval(const double* x) const {
+    double q = std::numeric_limits<double>::infinity();
+    for (std::size_t j = 0; j < st_.size(); ++j) q = std::min(q, eval_tet(j, x));
+    return q;
+  }
+  /// Sum of the radius ratios of the star with v at x (-inf if a tet is inverted).
+  double eval_sum_ratio(const double* x) const {
+    double s = 0;
+    for (const StarTet& t : st_) {
+      const double* p[4] = {t.p[0], t.p[1], t.p[2], t.p[3]};
+      p[t.iv] = x;
+      const double r = tet_radius_ratio(p[0], p[1], p[2], p[3]);
+      if (!(r > 0)) return -std::numeric_limits<double>::infinity();
+      s += r;
+    }
+    return s;
+  }
+  /// Projects x onto the facet plane (surface nodes).
+  void project(double* x) const {
+    if (!on_surface_) return;
+    const double s = plane_offset(x);
+    for (int k = 0; k < 3; ++k) x[k] -= s * n_[k];
+  }
+  void project_dir(double* g) const {
+    if (!on_surface_) return;
+    const double s = dot3(g, n_);
+    for (int k = 0; k < 3; ++k) g[k] -= s * n_[k];
+  }
+  /// Every tet valid, and for a surface node: every boundary face at v keeps its orientation
+  /// and x stays on the surface. The boundary faces at v form a planar fan whose outer polygon
+  /// is fixed: while every face keeps its orientation, v stays in the polygon's kernel and the
+  /// new fan covers the same polygon as the old one, i.e. the same part of the surface.
+  bool acceptable(const double* x) const {
+    for (const StarTet& s : st_) {
+      const double* p[4] = {s.p[0], s.p[1], s.p[2], s.p[3]};
+      p[s.iv] = x;
+      if (!tet_valid(p[0], p[1], p[2], p[3])) return false;
+    }
+    if (!on_surface_) return true;
+    for (std::size_t k = 0; k < bfaces_.size(); ++k) {
+      const double* p[3];
+      for (int j = 0; j < 3; ++j) p[j] = bfaces_[k][j] == v_ ? x : m_->p(bfaces_[k][j]);
+      double n[3];
+      tri_normal(p[0], p[1], p[2], n);
+      if (!(dot3(n, bnormal_[k].data()) > 0)) return false;
+    }
+    // On the node's own facet (the common case on CAD facets): no surface query needed.
+    return in_facet(x) || ctx_->query->distance(x) <= ctx_->on_surface;
+  }
+  /// Moves v to x (already acceptable).
+  void commit(ImproveTets& m, const double* x) const {
+    std::copy_n(x, 3, m.p_mut(v_));
+    if (on_surface_ && !in_facet(x)) {
+      double cp[3];
+      std::uint32_t facet = kNoFacet;
+      ctx_->query->closest(x, cp, &facet);
+      if (facet != kNoFacet) m.nodes().facet[v_] = facet;
+    }
+  }
+
+ private:
+  double plane_offset(const double* x) const {
+    const double d[3] = {x[0] - fp_[0][0], x[1] - fp_[0][1], x[2] - fp_[0][2]};
+    return dot3(d, n_);
+  }
+  bool in_facet(const double* x) const {
+    if (std::fabs(plane_offset(x)) > ctx_->on_surface) return false;
+    for (int j = 0; j < 3; ++j) {
+      double n[3];
+      tri_normal(x, fp_[(j + 1) % 3], fp_[(j + 2) % 3], n);
+      if (dot3(n, n_) < 0) return false;
+    }
+    return true;
+  }
+
+  const ImproveTets* m_ = nullptr;
+  const SmoothContext* ctx_ = nullptr;
+  std::uint32_t v_ = 0, facet_ = kNoFacet;
+  bool on_surface_ = false;
+  double n_[3] = {0, 0, 0};
+  const double* fp_[3] = {nullptr, nullptr, nullptr};
+  std::vector<std::uint32_t> star_, link_;
+  std::vector<StarTet> st_;
+  std::vector<std::array<std::uint32_t, 3>> bfaces_;
+  std::vector<std::array<double, 3>> bnormal_;
+};
+
+}  // namespace
+
+bool smooth_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, double* before,
+                   double* after) {
+  static thread_local VertexStar vs;
+  static thread_local std::vector<std::array<double, 3>> grads, active;
+  static thread_local std::vector<double> qs;
+  if (!vs.load(m, v, ctx)) return false;
+  const double* x0 = m.p(v);
+  double x[3] = {x0[0], x0[1], x0[2]};
+  const double q_start = vs.eval(x);
+  double q0 = q_start;
+  bool moved = false;
+  const double L = vs.mean_edge(m), h = 1e-7 * L;
+  const std::size_t n = vs.size();
+  qs.resize(n);
+  for (int iter = 0; iter < ctx.iterations; ++iter) {
+    grads.assign(n, {0, 0, 0});
+    for (std::size_t j = 0; j < n; ++j) {
+      qs[j] = vs.eval_tet(j, x);
+      for (int k = 0; k < 3; ++k) {
+        double y[3] = {x[0], x[1], x[2]};
+        y[k] += h;
+        grads[j][k] = (vs.eval_tet(j, y) - qs[j]) / h;
+      }
+      vs.project_dir(grads[j].data());
+    }
+    active.clear();
+    for (std::size_t j = 0; j < n; ++j)
+      if (qs[j] <= q0 + 1e-3) active.push_back(grads[j]);
+    if (active.empty()) break;
+    const std::array<double, 3> d = min_norm_point(active);
+    const double dd = dot3(d.data(), d.data());
+    if (!(dd > 0) || std::sqrt(dd) * L < 1e-9) break;
+    // Largest step before a non-active tet's linearised quality falls to the active level.
+    double alpha = 0.3 * L / std::sqrt(dd);
+    for (std::size_t j = 0; j < n; ++j) {
+      const double gd = dot3(grads[j].data(), d.data());
+      if (qs[j] > q0 + 1e-3 && gd < dd) alpha = std::min(alpha, (qs[j] - q0) / (dd - gd));
+    }
+    bool stepped = false;
+    for (int ls = 0; ls < 12; ++ls, alpha /= 2) {
+      double y[3] = {x[0] + alpha * d[0], x[1] + alpha * d[1], x[2] + alpha * d[2]};
+      vs.project(y);
+      const double q = vs.eval(y);
+      if (!(q > q0) || !vs.acceptable(y)) continue;
+      std::copy_n(y, 3, x);
+      q0 = q;
+      stepped = moved = true;
+      break;
+    }
+    if (!stepped) break;
+  }
+  if (before) *before = q_start;
+  if (after) *after = q0;
+  if (moved) vs.commit(m, x);
+  return moved;
+}
+
+bool relax_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, double floor) {
+  static thread_local VertexStar vs;
+  if (!vs.load(m, v, ctx)) return false;
+  const double* x0 = m.p(v);
+  double c[3] = {0, 0, 0};
+  for (std::uint32_t w : vs.link())
+    for (int k = 0; k < 3; ++k) c[k] += m.p(w)[k];
+  for (double& ck : c) ck /= double(vs.link().size());
+  const double q_old = vs.eval(x0);
+  const double s_old = vs.eval_sum_ratio(x0);
+  const double q_floor = std::min(q_old, floor);
+  for (double f : {1.0, 0.5, 0.25}) {
+    double y[3];
+    for (int k = 0; k < 3; ++k) y[k] = x0[k] + f * (c[k] - x0[k]);
+    vs.project(y);
+    if (!(vs.eval_sum_ratio(y) > s_old)) continue;
+    if (vs.eval(y) < q_floor) continue;
+    if (!vs.acceptable(y)) continue;
+    vs.commit(m, y);
+    return true;
+  }
+  return false;
+}
+
+}  // namespace kdmesh

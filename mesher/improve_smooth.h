@@ -1,0 +1,35 @@
+// kdmesh — optimisation-based vertex smoothing of the quality-improvement pass: a vertex moves
+// along the steepest ascent direction of the smallest tet_sine of its star (the min-norm point
+// of the active tets' gradients, Freitag & Ollivier-Gooch), with a halving line search; a move
+// is kept only if the star's smallest quality rises and every tet stays valid. Interior nodes
+// move freely; surface nodes only within the plane of their facet when every boundary face at
+// them lies in that plane: the fan of boundary faces keeps its outer polygon and every face its
+// orientation, so it covers the same part of the surface as before.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <cstdint>
+
+#include "mesher/improve_tets.h"
+#include "mesher/surface_prepare.h"
+#include "mesher/surface_query.h"
+
+namespace kdmesh {
+
+struct SmoothContext {
+  const PreparedSurface* surface = nullptr;  ///< null: surface nodes stay fixed
+  const SurfaceQuery* query = nullptr;
+  double on_surface = 0;       ///< a moved surface node must stay this close to the surface
+  int iterations = 4;          ///< ascent steps per call
+};
+
+/// Tries to move vertex v. Returns true if it moved; *before / *after get the star's smallest
+/// tet_sine (if not null).
+bool smooth_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx,
+                   double* before = nullptr, double* after = nullptr);
+
+/// Smart Laplacian: moves v towards the centroid of its neighbours (the whole way, half or a
+/// quarter) if that raises the sum of the star's radius ratios and keeps the star's smallest
+/// tet_sine at least min(its old value, floor). For the mean quality of the bulk.
+bool relax_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, double floor);
+
+}  // namespace kdmesh

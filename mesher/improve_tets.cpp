@@ -1,0 +1,313 @@
+// kdmesh — the mutable tet structure of the quality-improvement pass (mesher/improve_tets.h).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/improve_tets.h"
+
+#include <algorithm>
+#include <array>
+#include <string>
+
+#include "core/error.h"
+#include "mesher/parallel_for.h"
+#include "mesher/volume_mesh.h"
+
+namespace kdmesh {
+
+namespace {
+
+using Key = std::array<std::uint32_t, 3>;
+
+Key sorted_key(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+  if (a > b) std::swap(a, b);
+  if (b > c) std::swap(b, c);
+  if (a > b) std::swap(a, b);
+  return {a, b, c};
+}
+
+/// Vertices of face i of a tet, outward for a positively oriented tet (mesh_check's order).
+constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+Key face_key(const std::uint32_t* v, int i) {
+  return sorted_key(v[kFace[i][0]], v[kFace[i][1]], v[kFace[i][2]]);
+}
+
+}  // namespace
+
+ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
+                         const std::vector<std::uint32_t>& region)
+    : nodes_(&nodes) {
+  const std::size_t nt = tets.size() / 4, np = nodes.size_count();
+  tv_ = tets;
+  tv_.resize(4 * nt);
+  ta_.assign(4 * nt, kImproveNone);
+  region_.assign(nt, 0);
+  for (std::size_t t = 0; t < nt && t < region.size(); ++t) region_[t] = region[t];
+  version_.assign(nt, 0);
+  vtet_.assign(np, kImproveNone);
+  mark_.assign(nt, 0);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int i = 0; i < 4; ++i) {
+      if (tv_[4 * t + i] >= np)
+        throw UsageError("improve_mesh: tet " + std::to_string(t) + " references node " +
+                         std::to_string(tv_[4 * t + i]) + " of " + std::to_string(np));
+      vtet_[tv_[4 * t + i]] = std::uint32_t(t);
+    }
+  // Faces bucketed by their smallest vertex (counting sort), each bucket sorted by the two
+  // other vertices, equal neighbours matched.
+  struct Rec {
+    std::uint32_t b, c, ref;
+  };
+  std::vector<std::uint32_t> start(np + 1, 0);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int i = 0; i < 4; ++i) ++start[face_key(&tv_[4 * t], i)[0] + 1];
+  for (std::size_t k = 0; k < np; ++k) start[k + 1] += start[k];
+  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+  std::vector<Rec> faces(4 * nt);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int i = 0; i < 4; ++i) {
+      const Key k = face_key(&tv_[4 * t], i);
+      faces[fill[k[0]]++] = {k[1], k[2], std::uint32_t(4 * t + i)};
+    }
+  std::vector<std::uint8_t> overfull(np, 0);
+  parallel_for(np, [&](std::size_t kb, std::size_t ke, unsigned) {
+  for (std::size_t k = kb; k < ke; ++k) {
+    Rec* b = faces.data() + start[k];
+    Rec* e = faces.data() + start[k + 1];
+    std::sort(b, e, [](const Rec& x, const Rec& y) {
+      return x.b != y.b ? x.b < y.b : x.c != y.c ? x.c < y.c : x.ref < y.ref;
+    });
+    for (Rec* x = b; x < e;) {
+      Rec* y = x + 1;
+      while (y < e && y->b == x->b && y->c == x->c) ++y;
+      if (y - x > 2) overfull[k] = 1;
+      if (y - x == 2) {
+        ta_[x->ref] = x[1].ref;
+        ta_[x[1].ref] = x->ref;
+      }
+      x = y;
+    }
+  }
+  }, 4096);
+  for (std::size_t k = 0; k < np; ++k)
+    if (overfull[k])
+      throw CheckError("improve_mesh: a face at node " + std::to_string(k) +
+                       " is shared by more than two tets");
+}
+
+std::uint32_t ImproveTets::new_slot() {
+  if (!free_.empty()) {
+    const std::uint32_t t = free_.back();
+    free_.pop_back();
+    return t;
+  }
+  const std::uint32_t t = std::uint32_t(tv_.size() / 4);
+  tv_.insert(tv_.end(), 4, kImproveNone);
+  ta_.insert(ta_.end(), 4, kImproveNone);
+  region_.push_back(0);
+  version_.push_back(0);
+  mark_.push_back(0);
+  return t;
+}
+
+void ImproveTets::link_face(std::uint32_t t, int i, std::uint32_t ref) {
+  ta_[4 * std::size_t(t) + i] = ref;
+  if (ref != kImproveNone) ta_[ref] = 4 * t + std::uint32_t(i);
+}
+
+bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
+                          const std::vector<std::uint32_t>& fresh,
+                          std::vector<std::uint32_t>* created) {
+  if (++mark_stamp_ == 0) {
+    std::fill(mark_.begin(), mark_.end(), 0);
+    mark_stamp_ = 1;
+  }
+  for (std::uint32_t t : old) mark_[t] = mark_stamp_;
+  // Entries: the cavity's outer faces (source = the face reference across, or kImproveNone
+  // for a boundary face; tag 0) and the new tets' faces (source = 4*k+i; tag 1).
+  struct Entry {
+    Key key;
+    std::uint32_t src;
+    std::uint8_t is_new;
+  };
+  static thread_local std::vector<Entry> e;
+  e.clear();
+  for (std::uint32_t t : old)
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t r = ta_[4 * std::size_t(t) + i];
+      if (r != kImproveNone && mark_[r >> 2] == mark_stamp_) continue;
+      e.push_back({face_key(&tv_[4 * std::size_t(t)], i), r, 0});
+    }
+  const std::size_t nn = fresh.size() / 4;
+  for (std::size_t k = 0; k < nn; ++k)
+    for (int i = 0; i < 4; ++i) e.push_back({face_key(&fresh[4 * k], i), std::uint32_t(4 * k + i), 1});
+  std::sort(e.begin(), e.end(), [](const Entry& a, const Entry& b) {
+    return a.key != b.key ? a.key < b.key : a.is_new < b.is_new;
+  });
+  // Every key exactly twice, at least one of the two new.
+  for (std::size_t x = 0; x < e.size(); x += 2)
+    if (x + 1 >= e.size() || e[x].key != e[x + 1].key || !e[x + 1].is_new ||
+        (x + 2 < e.size() && e[x + 2].key == e[x].key))
+      return false;
+
+  std::vector<std::uint32_t> slot(nn);
+  for (std::uint32_t t : old) {
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t w = tv_[4 * std::size_t(t) + i];
+      if (vtet_[w] == t) vtet_[w] = kImproveNone;
+    }
+    tv_[4 * std::size_t(t)] = kImproveNone;
+    free_.push_back(t);
+  }
+  const std::uint32_t reg = old.empty() ? 0 : region_[old[0]];
+  for (std::size_t k = 0; k < nn; ++k) {
+    const std::uint32_t t = new_slot();
+    slot[k] = t;
+    for (int i = 0; i < 4; ++i) {
+      tv_[4 * std::size_t(t) + i] = fresh[4 * k + i];
+      ta_[4 * std::size_t(t) + i] = kImproveNone;
+      vtet_[fresh[4 * k + i]] = t;
+    }
+    region_[t] = reg;
+    ++version_[t];
+  }
+  for (std::size_t x = 0; x < e.size(); x += 2) {
+    const Entry &a = e[x], &b = e[x + 1];  // b is new
+    const std::uint32_t tb = slot[b.src >> 2];
+    const int ib = int(b.src & 3);
+    if (a.is_new) {
+      const std::uint32_t ta = slot[a.src >> 2];
+      ta_[4 * std::size_t(tb) + ib] = 4 * ta + (a.src & 3);
+      ta_[4 * std::size_t(ta) + (a.src & 3)] = 4 * tb + std::uint32_t(ib);
+    } else {
+      link_face(tb, ib, a.src);
+    }
+  }
+  if (created) *created = slot;
+  return true;
+}
+
+void ImproveTets::star(std::uint32_t v, std::vector<std::uint32_t>& out) const {
+  // Thread-safe (no shared marks): stars are small, so "seen" is a scan of `out`.
+  out.clear();
+  const std::uint32_t t0 = vtet_[v];
+  if (t0 == kImproveNone) return;
+  out.push_back(t0);
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    const std::uint32_t t = out[k];
+    for (int i = 0; i < 4; ++i) {
+      if (tv_[4 * std::size_t(t) + i] == v) continue;  // the face opposite v does not hold v
+      const std::uint32_t r = ta_[4 * std::size_t(t) + i];
+      if (r == kImproveNone) continue;
+      const std::uint32_t u = r >> 2;
+      if (std::find(out.begin(), out.end(), u) == out.end()) out.push_back(u);
+    }
+  }
+}
+
+bool ImproveTets::edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b,
+                            std::vector<std::uint32_t>& ring,
+                            std::vector<std::uint32_t>& tets) const {
+  ring.clear();
+  tets.clear();
+  const std::uint32_t* v = &tv_[4 * std::size_t(t)];
+  const int ia = index_in(v, a), ib = index_in(v, b);
+  int o[2], k = 0;
+  for (int i = 0; i < 4; ++i)
+    if (i != ia && i != ib) o[k++] = i;
+  // (a, b, v[o0], v[o1]) has the orientation of the tet iff the permutation is even.
+  const int perm[4] = {ia, ib, o[0], o[1]};
+  int inv = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j) inv += perm[i] > perm[j];
+  std::uint32_t c = v[o[0]], d = v[o[1]];
+  if (inv & 1) std::swap(c, d);
+  std::uint32_t cur = t;
+  for (int guard = 0; guard < 256; ++guard) {
+    ring.push_back(c);
+    tets.push_back(cur);
+    const std::uint32_t* cv = &tv_[4 * std::size_t(cur)];
+    const std::uint32_t r = ta_[4 * std::size_t(cur) + index_in(cv, c)];
+    if (r == kImproveNone) return false;
+    const std::uint32_t nt = r >> 2;
+    const std::uint32_t e = tv_[4 * std::size_t(nt) + (r & 3)];
+    cur = nt;
+    c = d;
+    d = e;
+    if (cur == t) return true;
+  }
+  return false;
+}
+
+std::size_t ImproveTets::write_back(VolumeMesh& mesh) const {
+  const std::size_t cap = tv_.size() / 4, np = nodes_->size_count();
+  std::vector<std::uint32_t> new_id(np, kImproveNone), tet_id(cap, kImproveNone);
+  std::uint32_t nn = 0, nt = 0;
+  for (std::size_t t = 0; t < cap; ++t) {
+    if (tv_[4 * t] == kImproveNone) continue;
+    tet_id[t] = nt++;
+    for (int i = 0; i < 4; ++i)
+      if (new_id[tv_[4 * t + i]] == kImproveNone) new_id[tv_[4 * t + i]] = 0;  // used
+  }
+  for (std::size_t i = 0; i < np; ++i)
+    if (new_id[i] != kImproveNone) new_id[i] = nn++;
+  // Boundary faces (in the old numbering): key, tet, outward vertices.
+  struct BFace {
+    Key key;
+    std::uint32_t tet;
+    std::array<std::uint32_t, 3> out;
+  };
+  std::vector<BFace> now;
+  for (std::size_t t = 0; t < cap; ++t) {
+    if (tv_[4 * t] == kImproveNone) continue;
+    for (int i = 0; i < 4; ++i)
+      if (ta_[4 * t + i] == kImproveNone) {
+        const std::uint32_t* v = &tv_[4 * t];
+        now.push_back({face_key(v, i), tet_id[t], {v[kFace[i][0]], v[kFace[i][1]], v[kFace[i][2]]}});
+      }
+  }
+  std::sort(now.begin(), now.end(), [](const BFace& a, const BFace& b) { return a.key < b.key; });
+  std::vector<std::uint8_t> used(now.size(), 0);
+  std::vector<std::uint32_t> boundary, boundary_tet;
+  boundary.reserve(3 * now.size());
+  boundary_tet.reserve(now.size());
+  std::size_t kept = 0;
+  for (std::size_t f = 0; f + 2 < mesh.boundary.size(); f += 3) {
+    const Key k = sorted_key(mesh.boundary[f], mesh.boundary[f + 1], mesh.boundary[f + 2]);
+    auto it = std::lower_bound(now.begin(), now.end(), k,
+                               [](const BFace& a, const Key& key) { return a.key < key; });
+    if (it == now.end() || it->key != k || used[std::size_t(it - now.begin())]) continue;
+    used[std::size_t(it - now.begin())] = 1;
+    ++kept;
+    for (int j = 0; j < 3; ++j) boundary.push_back(new_id[mesh.boundary[f + j]]);
+    boundary_tet.push_back(it->tet);
+  }
+  const std::size_t changed = (mesh.boundary.size() / 3 - kept) + (now.size() - kept);
+  for (std::size_t x = 0; x < now.size(); ++x) {
+    if (used[x]) continue;
+    for (int j = 0; j < 3; ++j) boundary.push_back(new_id[now[x].out[j]]);
+    boundary_tet.push_back(now[x].tet);
+  }
+  // Tets and regions.
+  std::vector<std::uint32_t> tets, region;
+  tets.reserve(4 * std::size_t(nt));
+  region.reserve(nt);
+  for (std::size_t t = 0; t < cap; ++t) {
+    if (tv_[4 * t] == kImproveNone) continue;
+    for (int i = 0; i < 4; ++i) tets.push_back(new_id[tv_[4 * t + i]]);
+    region.push_back(region_[t]);
+  }
+  // Nodes (compacted in id order).
+  NodeSet out;
+  out.points.xyz.reserve(3 * std::size_t(nn));
+  for (std::size_t i = 0; i < np; ++i)
+    if (new_id[i] != kImproveNone)
+      out.push_back(nodes_->points.p(std::uint32_t(i)), nodes_->kind[i], nodes_->facet[i],
+                    nodes_->size[i]);
+  mesh.tets = std::move(tets);
+  mesh.tet_region = std::move(region);
+  mesh.boundary = std::move(boundary);
+  mesh.boundary_tet = std::move(boundary_tet);
+  mesh.nodes = std::move(out);
+  return changed;
+}
+
+}  // namespace kdmesh

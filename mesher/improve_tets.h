@@ -1,0 +1,86 @@
+// kdmesh — the mutable tet structure of the quality-improvement pass: flat arrays of 4 vertices
+// and 4 face neighbours per tet, a free list, and the cavity replacement every operation uses.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "mesher/node_set.h"
+
+namespace kdmesh {
+
+struct VolumeMesh;
+
+/// Tets of a mesh being improved. Face i of tet t is the face opposite tv[4t+i]; ta[4t+i] is
+/// 4*u+j when that face is face j of tet u, kImproveNone when it is a boundary face (the mesh
+/// is a domain: every face has at most one other tet). A dead tet has tv[4t] == kImproveNone
+/// and its slot is on the free list. Every live tet is positively oriented.
+inline constexpr std::uint32_t kImproveNone = 0xFFFFFFFFu;
+
+class ImproveTets {
+ public:
+  /// Builds the face adjacency of `tets` (4 ids into `nodes` per tet, positively oriented;
+  /// every face in at most two tets, else CheckError) with one region id per tet. `nodes` is
+  /// referenced, not copied: moved vertices are written to it.
+  ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
+              const std::vector<std::uint32_t>& region);
+
+  NodeSet& nodes() { return *nodes_; }
+  const NodeSet& nodes() const { return *nodes_; }
+  const double* p(std::uint32_t v) const { return nodes_->points.p(v); }
+  double* p_mut(std::uint32_t v) { return nodes_->points.xyz.data() + 3 * std::size_t(v); }
+
+  std::size_t capacity() const { return tv_.size() / 4; }  ///< slots, live or dead
+  std::size_t live() const { return tv_.size() / 4 - free_.size(); }
+  bool alive(std::uint32_t t) const { return tv_[4 * std::size_t(t)] != kImproveNone; }
+  const std::uint32_t* v(std::uint32_t t) const { return &tv_[4 * std::size_t(t)]; }
+  std::uint32_t adj(std::uint32_t t, int i) const { return ta_[4 * std::size_t(t) + i]; }
+  std::uint32_t region(std::uint32_t t) const { return region_[t]; }
+  /// A live tet incident to vertex v (kImproveNone if v is in no tet).
+  std::uint32_t vertex_tet(std::uint32_t v) const { return vtet_[v]; }
+  /// Bumped whenever the slot is (re)used: lets queues drop stale entries.
+  std::uint32_t version(std::uint32_t t) const { return version_[t]; }
+
+  /// Replaces the tets `old` (a connected cavity) by `fresh` (4 vertex ids per tet, positively
+  /// oriented, filling the same region), all of region `region`. Faces are matched by vertex
+  /// set: every face of a new tet must be either a face of another new tet or a face of the
+  /// cavity's outer boundary. Returns false (and changes nothing) if the faces do not match.
+  /// New tet ids are written to *created (if given).
+  bool replace(const std::vector<std::uint32_t>& old, const std::vector<std::uint32_t>& fresh,
+               std::vector<std::uint32_t>* created = nullptr);
+
+  /// The live tets incident to v, by a walk over face neighbours from vertex_tet(v).
+  /// Thread-safe (reads only), as are v(), adj(), p().
+  void star(std::uint32_t v, std::vector<std::uint32_t>& out) const;
+
+  /// The ring of edge (a, b) found from tet t (which must contain a and b): ring vertices r_0..
+  /// r_{m-1} and tets such that tet k is (a, b, r_k, r_{k+1 mod m}) positively oriented.
+  /// Returns false if the edge is on the boundary (the ring is open).
+  bool edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b,
+                 std::vector<std::uint32_t>& ring, std::vector<std::uint32_t>& tets) const;
+
+  /// Writes the tets back (compacted, in slot order), the regions, and the boundary faces:
+  /// the faces of mesh.boundary that are still boundary faces keep their order and vertex
+  /// order, new ones follow (oriented outward); boundary_tet is recomputed. Nodes no tet uses
+  /// are removed (ids compacted). Returns the number of boundary faces that changed.
+  std::size_t write_back(VolumeMesh& mesh) const;
+
+ private:
+  void link_face(std::uint32_t t, int i, std::uint32_t ref);
+  std::uint32_t new_slot();
+
+  NodeSet* nodes_;
+  std::vector<std::uint32_t> tv_, ta_, region_, version_, vtet_, free_;
+  // Scratch of replace().
+  std::vector<std::uint32_t> mark_;
+  std::uint32_t mark_stamp_ = 0;
+};
+
+/// Position of vertex x in the 4 ids at v (0..3), or -1.
+inline int index_in(const std::uint32_t* v, std::uint32_t x) {
+  for (int i = 0; i < 4; ++i)
+    if (v[i] == x) return i;
+  return -1;
+}
+
+}  // namespace kdmesh

@@ -1,0 +1,544 @@
+// kdmesh — tests of the mesh quality-improvement pass (mesher/mesh_improve.h) and of its
+// parts: the flat tet structure (improve_tets), the flips (improve_flips), the objective
+// (improve_quality) and smoothing (improve_smooth), on hand-built configurations and on small
+// meshes made by the pipeline's own stages.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <memory>
+#include <set>
+#include <string>
+
+#include "mesher/improve_flips.h"
+#include "mesher/improve_quality.h"
+#include "mesher/improve_smooth.h"
+#include "mesher/improve_tets.h"
+#include "mesher/mesh_check.h"
+#include "mesher/mesh_improve.h"
+#include "mesher/node_placement.h"
+#include "mesher/predicates.h"
+#include "mesher/quality.h"
+#include "mesher/surface_prepare.h"
+#include "mesher/volume_mesh.h"
+#include "sizing/features.h"
+
+namespace kdmesh {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// ---------------------------------------------------------------------------------------------
+// Hand-built configurations.
+
+NodeSet interior_nodes(const std::vector<std::array<double, 3>>& pts) {
+  NodeSet n;
+  for (const auto& p : pts) n.push_back(p.data(), NodeKind::interior, kNoFacet, 1.0f);
+  return n;
+}
+
+double signed_volume(const NodeSet& n, const std::uint32_t* v) {
+  const double *a = n.points.p(v[0]), *b = n.points.p(v[1]), *c = n.points.p(v[2]), *d = n.points.p(v[3]);
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double x[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const double y[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+  return (u[0] * (x[1] * y[2] - x[2] * y[1]) + u[1] * (x[2] * y[0] - x[0] * y[2]) +
+          u[2] * (x[0] * y[1] - x[1] * y[0])) / 6;
+}
+
+/// Tets as sorted vertex sets (orientation checked separately).
+std::set<std::array<std::uint32_t, 4>> tet_sets(const std::vector<std::uint32_t>& tets) {
+  std::set<std::array<std::uint32_t, 4>> s;
+  for (std::size_t k = 0; k + 3 < tets.size(); k += 4) {
+    std::array<std::uint32_t, 4> a = {tets[k], tets[k + 1], tets[k + 2], tets[k + 3]};
+    std::sort(a.begin(), a.end());
+    s.insert(a);
+  }
+  return s;
+}
+
+/// A positively oriented copy of (a, b, c, d) (swaps c, d if needed).
+std::vector<std::uint32_t> positive(const NodeSet& n, std::uint32_t a, std::uint32_t b,
+                                    std::uint32_t c, std::uint32_t d) {
+  std::uint32_t v[4] = {a, b, c, d};
+  if (pred::orient3d(n.points.p(a), n.points.p(b), n.points.p(c), n.points.p(d)) < 0) std::swap(v[2], v[3]);
+  return {v[0], v[1], v[2], v[3]};
+}
+
+/// Every live tet exactly positive; every interior face linked both ways with the same vertex set.
+void expect_consistent(const ImproveTets& m) {
+  for (std::uint32_t t = 0; t < m.capacity(); ++t) {
+    if (!m.alive(t)) continue;
+    const std::uint32_t* v = m.v(t);
+    EXPECT_GT(pred::orient3d(m.p(v[0]), m.p(v[1]), m.p(v[2]), m.p(v[3])), 0) << "tet " << t;
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t r = m.adj(t, i);
+      if (r == kImproveNone) continue;
+      ASSERT_TRUE(m.alive(r >> 2));
+      EXPECT_EQ(m.adj(r >> 2, int(r & 3)), 4 * t + std::uint32_t(i));
+      std::set<std::uint32_t> f1, f2;
+      for (int j = 0; j < 4; ++j) {
+        if (j != i) f1.insert(v[j]);
+        if (j != int(r & 3)) f2.insert(m.v(r >> 2)[j]);
+      }
+      EXPECT_EQ(f1, f2);
+    }
+  }
+}
+
+std::vector<std::uint32_t> live_tets(const ImproveTets& m) {
+  std::vector<std::uint32_t> out;
+  for (std::uint32_t t = 0; t < m.capacity(); ++t)
+    if (m.alive(t)) out.insert(out.end(), m.v(t), m.v(t) + 4);
+  return out;
+}
+
+TEST(ImproveQuality, SineOfTheRegularTetAndOfASliver) {
+  // Regular tet: every dihedral angle is acos(1/3) = 70.53 deg, sin = sqrt(8)/3.
+  const double a[3] = {1, 1, 1}, b[3] = {1, -1, -1}, c[3] = {-1, 1, -1}, d[3] = {-1, -1, 1};
+  const double sgn = pred::orient3d(a, b, c, d) > 0 ? 1 : -1;
+  const double* p[4] = {a, b, c, d};
+  if (sgn < 0) std::swap(p[2], p[3]);
+  EXPECT_NEAR(tet_sine(p), std::sqrt(8.0) / 3, 1e-14);
+  EXPECT_NEAR(tet_radius_ratio(p[0], p[1], p[2], p[3]), 1.0, 1e-14);
+  // Inverted: -1.
+  EXPECT_EQ(tet_sine(p[0], p[1], p[3], p[2]), -1);
+  // The corner tet (0, e1, e2, e3): three 90 deg angles at the origin's edges, and the three
+  // angles at the slanted face are acos(1/sqrt 3) = 54.7 deg: min sine = sqrt(2/3).
+  const double o[3] = {0, 0, 0}, x[3] = {1, 0, 0}, y[3] = {0, 1, 0}, z[3] = {0, 0, 1};
+  EXPECT_NEAR(tet_sine(o, x, y, z), std::sqrt(2.0 / 3), 1e-14);
+  // Agreement with tet_quality on a sliver: min(sin min_dih, sin max_dih).
+  const double s1[3] = {0, 0, 0}, s2[3] = {1, 0, 0}, s3[3] = {0.5, 1, 0.01}, s4[3] = {0.5, 0.2, 1};
+  const TetQuality q = tet_quality(s1, s2, s3, s4);
+  const double expect = std::min(std::sin(q.min_dihedral * kPi / 180), std::sin(q.max_dihedral * kPi / 180));
+  // The smallest sine is at one of the extreme angles (sin is concave on [0, 180]).
+  EXPECT_NEAR(tet_sine(s1, s2, s3, s4), expect, 1e-9);
+}
+
+// 2-3 flip: the face (a, b, c) in the plane z = 0 between apexes p (z = 1) and q (z = -1)
+// whose segment pq crosses the face's interior. Face removal gives the three tets
+// {p, q, a, b}, {p, q, b, c}, {p, q, c, a} with the same total volume.
+TEST(ImproveFlips, FaceRemovalIsTheTwoThreeFlip) {
+  NodeSet n = interior_nodes({{0, 0, 0}, {3, 0, 0}, {0, 3, 0}, {1, 1, 1}, {1, 1, -1}});
+  const std::uint32_t a = 0, b = 1, c = 2, p = 3, q = 4;
+  std::vector<std::uint32_t> tets = positive(n, a, b, c, p);
+  const auto t2 = positive(n, a, b, c, q);
+  tets.insert(tets.end(), t2.begin(), t2.end());
+  ImproveTets m(n, tets, {0, 0});
+  expect_consistent(m);
+  const int i = index_in(m.v(0), p);  // the face of tet 0 opposite p is (a, b, c)
+  FlipCandidate cand;
+  ASSERT_TRUE(face_removal(m, 0, i, cand));
+  EXPECT_EQ(cand.old.size(), 2u);
+  ASSERT_EQ(cand.fresh.size(), 12u);
+  EXPECT_EQ(tet_sets(cand.fresh), (std::set<std::array<std::uint32_t, 4>>{
+                                      {a, b, p, q}, {b, c, p, q}, {a, c, p, q}}));
+  double before = 0, after = 0;
+  for (std::size_t k = 0; k < tets.size(); k += 4) before += signed_volume(n, &tets[k]);
+  for (std::size_t k = 0; k < cand.fresh.size(); k += 4) {
+    EXPECT_GT(signed_volume(n, &cand.fresh[k]), 0);
+    after += signed_volume(n, &cand.fresh[k]);
+  }
+  EXPECT_NEAR(after, before, 1e-14);
+  ASSERT_TRUE(m.replace(cand.old, cand.fresh));
+  EXPECT_EQ(m.live(), 3u);
+  expect_consistent(m);
+  // Every new tet shares two faces with the others (around pq) and has two boundary faces.
+  for (std::uint32_t t = 0; t < m.capacity(); ++t) {
+    if (!m.alive(t)) continue;
+    int inner = 0;
+    for (int k = 0; k < 4; ++k) inner += m.adj(t, k) != kImproveNone;
+    EXPECT_EQ(inner, 2);
+  }
+}
+
+// When pq misses the face (q moved beyond edge bc), a new tet would be inverted: no flip.
+TEST(ImproveFlips, FaceRemovalRefusesWhenTheNewEdgeMissesTheFace) {
+  NodeSet n = interior_nodes({{0, 0, 0}, {3, 0, 0}, {0, 3, 0}, {1, 1, 1}, {4, 4, -1}});
+  std::vector<std::uint32_t> tets = positive(n, 0, 1, 2, 3);
+  const auto t2 = positive(n, 0, 1, 2, 4);
+  tets.insert(tets.end(), t2.begin(), t2.end());
+  ImproveTets m(n, tets, {0, 0});
+  FlipCandidate cand;
+  EXPECT_FALSE(face_removal(m, 0, index_in(m.v(0), 3), cand));
+  EXPECT_FALSE(face_removal(m, 0, index_in(m.v(0), 0), cand));  // a boundary face
+}
+
+// 3-2 flip: the three tets around edge pq (the 2-3 flip's result) go back to the two tets
+// {a, b, c, p}, {a, b, c, q} by edge removal of pq (ring of 3: one triangulation).
+TEST(ImproveFlips, EdgeRemovalOfARingOfThreeIsTheThreeTwoFlip) {
+  NodeSet n = interior_nodes({{0, 0, 0}, {3, 0, 0}, {0, 3, 0}, {1, 1, 1}, {1, 1, -1}});
+  const std::uint32_t a = 0, b = 1, c = 2, p = 3, q = 4;
+  std::vector<std::uint32_t> tets;
+  for (auto [x, y] : {std::pair{a, b}, std::pair{b, c}, std::pair{c, a}}) {
+    const auto t = positive(n, x, y, p, q);
+    tets.insert(tets.end(), t.begin(), t.end());
+  }
+  ImproveTets m(n, tets, {7, 7, 7});
+  std::vector<std::uint32_t> ring, ring_tets;
+  ASSERT_TRUE(m.edge_ring(0, p, q, ring, ring_tets));
+  EXPECT_EQ(std::set<std::uint32_t>(ring.begin(), ring.end()), (std::set<std::uint32_t>{a, b, c}));
+  // The ring's order: (p, q, r_k, r_k+1) positive.
+  for (std::size_t k = 0; k < ring.size(); ++k)
+    EXPECT_GT(pred::orient3d(n.points.p(p), n.points.p(q), n.points.p(ring[k]),
+                             n.points.p(ring[(k + 1) % ring.size()])), 0);
+  FlipCandidate cand;
+  ASSERT_TRUE(edge_removal(m, 0, p, q, 10, cand));
+  EXPECT_EQ(tet_sets(cand.fresh), (std::set<std::array<std::uint32_t, 4>>{{a, b, c, p}, {a, b, c, q}}));
+  EXPECT_DOUBLE_EQ(cand.q_old, std::min({sine_of(m, 0), sine_of(m, 1), sine_of(m, 2)}));
+  ASSERT_TRUE(m.replace(cand.old, cand.fresh));
+  expect_consistent(m);
+  EXPECT_EQ(m.live(), 2u);
+  for (std::uint32_t t = 0; t < m.capacity(); ++t)
+    if (m.alive(t)) {
+      EXPECT_EQ(m.region(t), 7u);  // regions carried over
+    }
+}
+
+// 4-4 flip: edge ab (a above, b below, length 3) with a ring of four that is a rhombus with a
+// short diagonal r1 r3 (length 2) and a long one r0 r2 (length 4). Of the two triangulations
+// of the ring, edge removal takes the one whose worst tet is better, computed here directly
+// (and better than the four tets around the long edge ab).
+TEST(ImproveFlips, EdgeRemovalOfARingOfFourPicksTheBetterDiagonal) {
+  NodeSet n = interior_nodes({{0, 0, 1.5}, {0, 0, -1.5}, {2, 0, 0}, {0, 1, 0}, {-2, 0, 0}, {0, -1, 0}});
+  const std::uint32_t a = 0, b = 1, r[4] = {2, 3, 4, 5};
+  std::vector<std::uint32_t> tets;
+  for (int k = 0; k < 4; ++k) {
+    const auto t = positive(n, a, b, r[k], r[(k + 1) % 4]);
+    tets.insert(tets.end(), t.begin(), t.end());
+  }
+  ImproveTets m(n, tets, {0, 0, 0, 0});
+  auto worst = [&](std::uint32_t d0, std::uint32_t d1, std::uint32_t e0, std::uint32_t e1) {
+    // Tets of the ring split by diagonal d0 d1 (the other two ring vertices e0, e1).
+    double q = 1;
+    for (std::uint32_t apex : {a, b})
+      for (std::uint32_t e : {e0, e1}) {
+        const auto t = positive(n, d0, d1, e, apex);
+        q = std::min(q, tet_sine(n.points.p(t[0]), n.points.p(t[1]), n.points.p(t[2]), n.points.p(t[3])));
+      }
+    return q;
+  };
+  const double q_short = worst(r[1], r[3], r[0], r[2]), q_long = worst(r[0], r[2], r[1], r[3]);
+  ASSERT_GT(q_short, q_long);  // the configuration is as intended
+  FlipCandidate cand;
+  ASSERT_TRUE(edge_removal(m, 0, a, b, 10, cand));
+  EXPECT_GT(cand.q_new, cand.q_old);
+  // With a floor at what the best triangulation reaches, nothing is proposed.
+  FlipCandidate none;
+  EXPECT_FALSE(edge_removal(m, 0, a, b, 10, none, q_short));
+  EXPECT_DOUBLE_EQ(cand.q_new, q_short);
+  ASSERT_EQ(cand.fresh.size(), 16u);
+  for (const auto& t : tet_sets(cand.fresh)) {
+    EXPECT_TRUE(std::count(t.begin(), t.end(), r[1]) && std::count(t.begin(), t.end(), r[3]));
+    EXPECT_NE(std::count(t.begin(), t.end(), a), std::count(t.begin(), t.end(), b));
+  }
+  double before = 0, after = 0;
+  for (std::size_t k = 0; k < tets.size(); k += 4) before += signed_volume(n, &tets[k]);
+  for (std::size_t k = 0; k < cand.fresh.size(); k += 4) after += signed_volume(n, &cand.fresh[k]);
+  EXPECT_NEAR(after, before, 1e-14);
+  ASSERT_TRUE(m.replace(cand.old, cand.fresh));
+  expect_consistent(m);
+  // Every edge but the new diagonal lies on the boundary of the octahedron: open ring, no
+  // removal. The diagonal's ring is (a, r0, b, r2).
+  for (std::uint32_t t = 0; t < m.capacity(); ++t)
+    if (m.alive(t)) {
+      const std::uint32_t* v = m.v(t);
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) {
+          const bool diagonal = std::min(v[i], v[j]) == r[1] && std::max(v[i], v[j]) == r[3];
+          std::vector<std::uint32_t> ring, rt;
+          EXPECT_EQ(m.edge_ring(t, v[i], v[j], ring, rt), diagonal);
+          if (diagonal) {
+            EXPECT_EQ(std::set<std::uint32_t>(ring.begin(), ring.end()),
+                      (std::set<std::uint32_t>{a, b, r[0], r[2]}));
+          }
+        }
+    }
+}
+
+// A ring of n = 5 around a long vertical edge (an irregular, non-planar pentagon): edge
+// removal makes 2 (n - 2) = 6 tets of the same volume, all valid, and its quality is the best
+// over the pentagon's five triangulations (the fans from each vertex), computed here directly.
+TEST(ImproveFlips, EdgeRemovalOfARingOfFive) {
+  std::vector<std::array<double, 3>> pts = {{0, 0, 2}, {0, 0, -2.4}};
+  const double radius[5] = {1, 1.3, 0.8, 1.1, 0.9};
+  for (int k = 0; k < 5; ++k)
+    pts.push_back({radius[k] * std::cos(2 * kPi * k / 5), radius[k] * std::sin(2 * kPi * k / 5), 0.05 * k});
+  NodeSet n = interior_nodes(pts);
+  std::vector<std::uint32_t> tets;
+  for (std::uint32_t k = 0; k < 5; ++k) {
+    const auto t = positive(n, 0, 1, 2 + k, 2 + (k + 1) % 5);
+    tets.insert(tets.end(), t.begin(), t.end());
+  }
+  ImproveTets m(n, tets, std::vector<std::uint32_t>(5, 0));
+  double best_fan = -1;
+  for (std::uint32_t f = 0; f < 5; ++f) {
+    double q = 1;
+    for (std::uint32_t s = 1; s <= 3; ++s) {  // triangles (f, f+s, f+s+1)
+      const std::uint32_t x = 2 + f, y = 2 + (f + s) % 5, z = 2 + (f + s + 1) % 5;
+      for (std::uint32_t apex : {0u, 1u}) {
+        const auto t = positive(n, x, y, z, apex);
+        q = std::min(q, tet_sine(n.points.p(t[0]), n.points.p(t[1]), n.points.p(t[2]), n.points.p(t[3])));
+      }
+    }
+    best_fan = std::max(best_fan, q);
+  }
+  FlipCandidate cand;
+  ASSERT_TRUE(edge_removal(m, 0, 0, 1, 10, cand));
+  EXPECT_EQ(cand.fresh.size(), 4u * 6);
+  EXPECT_DOUBLE_EQ(cand.q_new, best_fan);
+  EXPECT_GT(cand.q_new, cand.q_old);
+  for (std::size_t k = 0; k < cand.fresh.size(); k += 4)
+    EXPECT_GT(pred::orient3d(n.points.p(cand.fresh[k]), n.points.p(cand.fresh[k + 1]),
+                             n.points.p(cand.fresh[k + 2]), n.points.p(cand.fresh[k + 3])), 0);
+  double before = 0, after = 0;
+  for (std::size_t k = 0; k < tets.size(); k += 4) before += signed_volume(n, &tets[k]);
+  for (std::size_t k = 0; k < cand.fresh.size(); k += 4) after += signed_volume(n, &cand.fresh[k]);
+  EXPECT_NEAR(after, before, 1e-13);
+  EXPECT_FALSE(edge_removal(m, 0, 0, 1, 4, cand));  // ring larger than max_ring
+  // Edge (apex, ring vertex) lies on the boundary of this 5-tet ball: open ring.
+  EXPECT_FALSE(edge_removal(m, 0, 0, 2, 10, cand));
+  ASSERT_TRUE(edge_removal(m, 0, 0, 1, 10, cand));
+  ASSERT_TRUE(m.replace(cand.old, cand.fresh));
+  expect_consistent(m);
+  EXPECT_EQ(m.live(), 6u);
+  // replace() refuses new tets that do not fill the cavity (a missing tet).
+  std::vector<std::uint32_t> all;
+  for (std::uint32_t t = 0; t < m.capacity(); ++t)
+    if (m.alive(t)) all.push_back(t);
+  std::vector<std::uint32_t> fewer = live_tets(m);
+  fewer.resize(fewer.size() - 4);
+  EXPECT_FALSE(m.replace(all, fewer));
+  EXPECT_EQ(m.live(), 6u);
+  expect_consistent(m);
+}
+
+// Smoothing: the centre vertex of an octahedron of six tets-pairs, pushed close to one face,
+// moves back; the star's worst sine rises; it is never moved outside its kernel.
+TEST(ImproveSmooth, InteriorVertexMovesToRaiseTheWorstTet) {
+  std::vector<std::array<double, 3>> pts = {{0.9, 0.05, 0.02}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0},
+                                            {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  NodeSet n = interior_nodes(pts);
+  std::vector<std::uint32_t> tets;
+  const std::uint32_t xs[2] = {1, 2}, ys[2] = {3, 4}, zs[2] = {5, 6};
+  for (auto x : xs)
+    for (auto y : ys)
+      for (auto z : zs) {
+        const auto t = positive(n, 0, x, y, z);
+        tets.insert(tets.end(), t.begin(), t.end());
+      }
+  ImproveTets m(n, tets, std::vector<std::uint32_t>(8, 0));
+  SmoothContext ctx;
+  ctx.iterations = 20;
+  double before = 0, after = 0;
+  ASSERT_TRUE(smooth_vertex(m, 0, ctx, &before, &after));
+  EXPECT_GT(after, before);
+  // The optimum is the centre (the corner tets' sine is then sqrt(2/3)); 20 steps get close.
+  EXPECT_GT(after, 0.9 * std::sqrt(2.0 / 3));
+  expect_consistent(m);
+  // Boundary-only vertices (here every other vertex: they have boundary faces) and a
+  // surface-kind node without a surface do not move.
+  EXPECT_FALSE(smooth_vertex(m, 1, ctx));
+  // Relaxation to the centroid of the neighbours (the origin) from a displaced centre.
+  m.p_mut(0)[0] = 0.5;
+  EXPECT_TRUE(relax_vertex(m, 0, ctx, 0.0));
+  EXPECT_NEAR(m.p(0)[0], 0, 1e-15);
+  expect_consistent(m);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Meshes from the pipeline.
+
+/// Axis-aligned boxes [lo, hi], 12 outward triangles each, through prepare_surface.
+PreparedSurface boxes(const std::vector<std::array<double, 6>>& bs) {
+  SurfaceMesh s;
+  for (const auto& b : bs) {
+    const std::uint32_t o = std::uint32_t(s.points.size());
+    for (int i = 0; i < 8; ++i)
+      s.points.push_back((i & 1) ? b[3] : b[0], (i >> 1 & 1) ? b[4] : b[1], (i >> 2 & 1) ? b[5] : b[2]);
+    for (std::uint32_t x : {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                            2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5})
+      s.tris.push_back(o + x);
+  }
+  return prepare_surface(std::move(s), "boxes");
+}
+
+struct Piped {
+  PreparedSurface surface;
+  std::unique_ptr<SurfaceQuery> query;
+  SizingField sizing;
+  VolumeMesh mesh;
+};
+
+Piped pipeline(const std::vector<std::array<double, 6>>& bs, double h, double graded_at = -1) {
+  Piped p;
+  p.surface = boxes(bs);
+  p.query = std::make_unique<SurfaceQuery>(p.surface.mesh);
+  SizingOptions so;
+  so.max_size = h;
+  so.gradation = 0.3;
+  if (graded_at >= 0) {
+    SizingZone z;
+    z.kind = SizingZone::Kind::point;
+    z.size = h / 4;
+    z.coords = {graded_at, graded_at, graded_at};
+    so.zones.push_back(z);
+  }
+  p.sizing = build_sizing_field(p.surface.mesh, so);
+  const NodeSet nodes = place_nodes(p.surface, *p.query, detect_sharp_edges(p.surface.mesh, 30), p.sizing);
+  p.mesh = mesh_volume(p.surface, *p.query, p.sizing, nodes);
+  return p;
+}
+
+std::string failures(const MeshCheck& c) {
+  std::string s;
+  for (auto& f : c.failures) s += f + "\n";
+  return s;
+}
+
+double total_volume(const VolumeMesh& vm) {
+  double v = 0;
+  for (std::size_t t = 0; t < vm.num_tets(); ++t) v += signed_volume(vm.nodes, &vm.tets[4 * t]);
+  return v;
+}
+
+std::multiset<std::array<std::uint32_t, 3>> boundary_set(const VolumeMesh& vm) {
+  std::multiset<std::array<std::uint32_t, 3>> s;
+  for (std::size_t k = 0; k + 2 < vm.boundary.size(); k += 3) {
+    std::array<std::uint32_t, 3> f = {vm.boundary[k], vm.boundary[k + 1], vm.boundary[k + 2]};
+    std::sort(f.begin(), f.end());
+    s.insert(f);
+  }
+  return s;
+}
+
+// The unit cube, graded towards a corner (sizes 0.0375 .. 0.15): every property the pass
+// promises, on a mesh with slivers.
+TEST(MeshImprove, GradedCubeKeepsEveryInvariantAndRaisesTheWorstAngle) {
+  Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.15, 0.0);
+  const VolumeMesh before = p.mesh;
+  const QualitySummary q0 = summarize_quality(to_tet_mesh(before));
+  ASSERT_LT(q0.min_dihedral, 5.0);  // the Delaunay mesh has slivers to remove
+  ImproveOptions o;
+  std::vector<double> fractions;
+  o.progress = [&](const std::string& stage, double f) {
+    EXPECT_EQ(stage, "improve");
+    fractions.push_back(f);
+  };
+  const ImproveStats st = improve_mesh(p.mesh, p.surface, *p.query, p.sizing, o);
+  ASSERT_FALSE(fractions.empty());
+  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+  EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
+  const VolumeMesh& vm = p.mesh;
+  const MeshCheck c = check_volume_mesh(vm, p.surface, *p.query, p.sizing);
+  EXPECT_TRUE(c.ok()) << failures(c);
+  ASSERT_EQ(vm.tet_region.size(), vm.num_tets());
+  ASSERT_EQ(vm.boundary_tet.size(), vm.boundary.size() / 3);
+  for (std::size_t t = 0; t < vm.num_tets(); ++t) {
+    const std::uint32_t* v = &vm.tets[4 * t];
+    const double *a = vm.nodes.points.p(v[0]), *b = vm.nodes.points.p(v[1]),
+                 *cc = vm.nodes.points.p(v[2]), *d = vm.nodes.points.p(v[3]);
+    ASSERT_GT(pred::orient3d(a, b, cc, d), 0) << "tet " << t;
+    ASSERT_GE(volume_length(a, b, cc, d), kZeroVolumeLength) << "tet " << t;
+  }
+  // Boundary unchanged: the same faces in the same order (node ids are kept: no node is
+  // removed), each boundary_tet owning its face.
+  EXPECT_EQ(st.boundary_changes, 0u);
+  EXPECT_EQ(vm.boundary, before.boundary);
+  for (std::size_t f = 0; f < vm.boundary_tet.size(); ++f) {
+    const std::uint32_t* v = &vm.tets[4 * std::size_t(vm.boundary_tet[f])];
+    for (int j = 0; j < 3; ++j) EXPECT_NE(index_in(v, vm.boundary[3 * f + j]), -1);
+  }
+  // Nodes: same count and kinds; corner and edge nodes exactly in place; surface nodes on
+  // their face plane of the cube (a coordinate exactly 0 or 1 stays so up to rounding).
+  ASSERT_EQ(vm.nodes.size_count(), before.nodes.size_count());
+  std::size_t moved_surface = 0;
+  for (std::size_t i = 0; i < vm.nodes.size_count(); ++i) {
+    ASSERT_EQ(vm.nodes.kind[i], before.nodes.kind[i]);
+    const double* x = vm.nodes.points.p(std::uint32_t(i));
+    const double* x0 = before.nodes.points.p(std::uint32_t(i));
+    if (vm.nodes.kind[i] == NodeKind::corner || vm.nodes.kind[i] == NodeKind::edge) {
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(x[k], x0[k]);
+    } else if (vm.nodes.kind[i] == NodeKind::surface) {
+      // (placed nodes may sit one ulp inside, e.g. at 1 - 2^-53; moved ones may round onto it)
+      int on_face = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double plane = std::round(x0[k]);
+        on_face += std::fabs(x0[k] - plane) <= 1e-15 && std::fabs(x[k] - plane) <= 1e-15;
+      }
+      EXPECT_GE(on_face, 1) << "node " << i;
+      moved_surface += !std::equal(x, x + 3, x0);
+    }
+  }
+  EXPECT_GT(moved_surface, 0u);  // surface smoothing within the cube's faces took place
+  // Volume: the cube's, to rounding.
+  EXPECT_NEAR(total_volume(vm), 1.0, 1e-12);
+  // Quality: strictly better worst angle, and what the pass reaches on this cube.
+  const QualitySummary q1 = summarize_quality(to_tet_mesh(vm));
+  EXPECT_GT(q1.min_dihedral, q0.min_dihedral);
+  EXPECT_GE(q1.min_dihedral, 20.0);
+  EXPECT_LE(q1.max_dihedral, 150.0);
+  EXPECT_GE(q1.mean_radius_ratio, q0.mean_radius_ratio);
+  EXPECT_GE(q1.mean_radius_ratio, 0.8);
+  EXPECT_GT(st.edge_removals + st.face_removals, 0u);
+  EXPECT_GT(st.smoothed + st.relaxed, 0u);
+  // Stage records: input first, then the rounds.
+  ASSERT_FALSE(st.stages.empty());
+  EXPECT_EQ(st.stages.front().name, "input");
+  EXPECT_EQ(st.stages.front().tets, before.num_tets());
+  EXPECT_NEAR(st.stages.front().min_dihedral, q0.min_dihedral, 1e-4);
+  EXPECT_NEAR(st.stages.back().min_dihedral, q1.min_dihedral, 1e-4);
+
+  // Determinism: the same input and options give the same mesh, bit for bit, on one thread
+  // as on several (the vertex passes run slabs in parallel).
+  for (unsigned threads : {1u, 2u, 0u}) {
+    VolumeMesh again = before;
+    ImproveOptions ot = o;
+    ot.progress = nullptr;
+    ot.threads = threads;
+    improve_mesh(again, p.surface, *p.query, p.sizing, ot);
+    EXPECT_EQ(again.tets, vm.tets) << threads << " threads";
+    EXPECT_EQ(again.nodes.points.xyz, vm.nodes.points.xyz) << threads << " threads";
+    EXPECT_EQ(again.tet_region, vm.tet_region);
+    EXPECT_EQ(again.boundary_tet, vm.boundary_tet);
+  }
+}
+
+// Two disjoint boxes: two regions, each keeps its tets and volume; the boundary face set is
+// unchanged.
+TEST(MeshImprove, TwoBodiesKeepTheirRegions) {
+  Piped p = pipeline({{0, 0, 0, 1, 1, 1}, {2, 0, 0, 3, 1, 0.5}}, 0.2);
+  ASSERT_EQ(p.surface.num_bodies, 2u);
+  const auto bset = boundary_set(p.mesh);
+  improve_mesh(p.mesh, p.surface, *p.query, p.sizing);
+  const VolumeMesh& vm = p.mesh;
+  const MeshCheck c = check_volume_mesh(vm, p.surface, *p.query, p.sizing);
+  EXPECT_TRUE(c.ok()) << failures(c);
+  EXPECT_EQ(boundary_set(vm), bset);
+  double vol[2] = {0, 0};
+  for (std::size_t t = 0; t < vm.num_tets(); ++t) {
+    double x = 0;
+    for (int i = 0; i < 4; ++i) x += vm.nodes.points.p(vm.tets[4 * t + i])[0] / 4;
+    const std::uint32_t body = p.surface.shell_body[p.surface.tri_shell[x < 1.5 ? 0 : 12]];
+    ASSERT_EQ(vm.tet_region[t], body) << "tet " << t;
+    vol[body] += signed_volume(vm.nodes, &vm.tets[4 * t]);
+  }
+  const std::uint32_t b0 = p.surface.shell_body[p.surface.tri_shell[0]];
+  EXPECT_NEAR(vol[b0], 1.0, 1e-12);
+  EXPECT_NEAR(vol[1 - b0], 0.5, 1e-12);
+}
+
+TEST(MeshImprove, BadOptionsThrow) {
+  Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.5);
+  ImproveOptions o;
+  o.work_angle = 0;
+  EXPECT_THROW(improve_mesh(p.mesh, p.surface, *p.query, p.sizing, o), UsageError);
+  o = {};
+  o.max_ring = 2;
+  EXPECT_THROW(improve_mesh(p.mesh, p.surface, *p.query, p.sizing, o), UsageError);
+}
+
+}  // namespace
+}  // namespace kdmesh
