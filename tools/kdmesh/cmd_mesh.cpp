@@ -38,6 +38,7 @@ struct Options {
   int element_order = 1;
   std::string msh_version = "4.1";
   bool patch_groups = false;
+  bool no_improve = false;
   Output out;
 };
 
@@ -71,6 +72,7 @@ MeshJob make_job(const Options& o) {
   }
   if (!o.max_memory.empty()) job.max_memory = parse_memory_amount(o.max_memory, "--max-memory");
   job.repair = parse_surface_repairs(o.repair, "--repair");
+  job.improve = !o.no_improve;
   job.msh = o.msh;
   job.inp = o.inp;
   job.medit = o.medit;
@@ -165,6 +167,8 @@ void add_mesh_command(CLI::App& app, Runner& run) {
   cmd->add_option("--msh-version", o->msh_version, "MSH format version")
       ->check(CLI::IsMember({"4.1", "2.2"}))
       ->capture_default_str();
+  cmd->add_flag("--no-improve", o->no_improve,
+                "Skip the quality improvement (flips and smoothing): keep the Delaunay tets");
   cmd->add_flag("--patch-groups", o->patch_groups,
                 "Name every surface patch and feature curve as a group (patch_<i>, curve_<i>)");
   add_output_flags(cmd, o->out);

@@ -56,7 +56,7 @@ const std::vector<std::string> kTopKeys = {"defaults", "jobs"};
 const std::vector<std::string> kJobKeys = {"name",        "input", "scale", "size",  "min_size",
                                            "gradation",   "sharp_angle",    "zones", "order",
                                            "seed",        "check", "max_memory", "repair", "groups",
-                                           "patch_groups", "element_order", "msh_version", "output"};
+                                           "patch_groups", "element_order", "msh_version", "improve", "output"};
 const std::vector<std::string> kZoneTypes = {"sharp_edges", "polyline", "segment", "plane",
                                              "point",       "box",      "ball"};
 const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes", "msh", "inp", "mesh"};
@@ -374,6 +374,12 @@ class Loader {
       if (!v.IsScalar() || (v.Scalar() != "true" && v.Scalar() != "false"))
         fail(v, key("patch_groups") + ": expected true or false, got " + describe(v));
       job.group_options.patch_groups = job.group_options.curve_groups = v.Scalar() == "true";
+    }
+    if (e.count("improve")) {
+      const YAML::Node v = e.at("improve").value;
+      if (!v.IsScalar() || (v.Scalar() != "true" && v.Scalar() != "false"))
+        fail(v, key("improve") + ": expected true or false, got " + describe(v));
+      job.improve = v.Scalar() == "true";
     }
     if (e.count("element_order")) {
       const YAML::Node v = e.at("element_order").value;

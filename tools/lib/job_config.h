@@ -41,6 +41,7 @@ namespace kdmesh {
 ///                     exactly one of zone: <sizing zone name> | point: [x,y,z] (the nearest
 ///                     patch / curve) | box: {min: [..], max: [..]} (everything inside)}
 ///     patch_groups optional bool: also a group per surface patch and feature curve (default false)
+///     improve      optional bool: quality improvement after meshing (default true)
 ///     element_order optional 1 or 2 (C3D10 / tet10 with mid-edge nodes on the surface)
 ///     msh_version  optional 4.1 (default) or 2.2
 ///     output       optional mapping {vtu, summary, nodes, msh, inp, mesh}: paths relative to out_dir

@@ -23,6 +23,7 @@
 #include "mesher/delaunay.h"
 #include "mesher/fe_assembly.h"
 #include "mesher/mesh_check.h"
+#include "mesher/mesh_improve.h"
 #include "mesher/node_placement.h"
 #include "mesher/quality.h"
 #include "mesher/resource_estimate.h"
@@ -85,7 +86,7 @@ std::string format_job_report(const nlohmann::json& j) {
   if (j.contains("seconds")) {
     s << "  time          ";
     bool first = true;
-    for (const char* k : {"read", "prepare", "features", "sizing", "place", "mesh",
+    for (const char* k : {"read", "prepare", "features", "sizing", "estimate", "place", "mesh", "improve",
                           "delaunay_check", "mesh_check", "quality", "write", "total"})
       if (j["seconds"].contains(k)) {
         s << (first ? "" : ", ") << k << " " << std::fixed << std::setprecision(3)
@@ -327,7 +328,7 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
   vo.order = job.order;
   vo.order.seed = job.seed;
   vo.progress = progress;
-  const VolumeMesh mesh = mesh_volume(surface, query, sizing, std::move(nodes), vo);
+  VolumeMesh mesh = mesh_volume(surface, query, sizing, std::move(nodes), vo);
   sec["mesh"] = clock.seconds();
   sec["mesh_stages"] = {{"order", mesh.stats.order_seconds},
                         {"delaunay", mesh.stats.delaunay_seconds},
@@ -345,6 +346,20 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
   counts["steiner_rounds"] = mesh.stats.rounds;
   counts["tets"] = mesh.num_tets();
   counts["boundary_faces"] = mesh.boundary.size() / 3;
+
+  if (job.improve) {
+    clock.reset();
+    log("improving " + std::to_string(mesh.num_tets()) + " tets");
+    ImproveOptions io;
+    io.measure_stages = false;  // the quality block below measures the result
+    io.progress = progress;
+    const ImproveStats imp = improve_mesh(mesh, surface, query, sizing, io);
+    sec["improve"] = clock.seconds();
+    counts["tets"] = mesh.num_tets();
+    j["improve"] = {{"edge_removals", imp.edge_removals}, {"face_removals", imp.face_removals},
+                    {"relaxed", imp.relaxed}, {"smoothed", imp.smoothed},
+                    {"boundary_changes", imp.boundary_changes}};
+  }
 
   bool delaunay_ok = true;
   if (job.check_tetgen || job.check_delaunay) {

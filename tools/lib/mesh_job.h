@@ -33,6 +33,7 @@ struct MeshJob {
   /// when its estimated peak memory exceeds it. 0 = the machine's physical memory; < 0 = none.
   double max_memory = 0;
   SurfaceRepairOptions repair; ///< opt-in safe surface repairs, reported as notices
+  bool improve = true;         ///< quality improvement after meshing (mesher/mesh_improve.h)
   std::string vtu, summary, nodes;  ///< output paths (usable as is); empty = not written
   /// Solver formats (usable as is; empty = not written): Gmsh MSH, Abaqus/CalculiX INP, MEDIT.
   std::string msh, inp, medit;
@@ -60,8 +61,11 @@ struct MeshJobResult {
   ///   counts {surface_points, surface_facets, shells, bodies, feature_edges, feature_corners,
   ///           placed_nodes, nodes, nodes_by_kind {corner, edge, surface, interior},
   ///           steiner_points, dropped_nodes, steiner_rounds, tets, boundary_faces},
-  ///   seconds {read, prepare, features, sizing, query, place, mesh, delaunay_check, mesh_check,
-  ///            quality, write, total,
+  ///   estimate {nodes, surface_nodes, interior_nodes, peak_bytes, capped, limit_bytes},
+  ///   repairs {...} (when asked), improve {edge_removals, face_removals, relaxed, smoothed,
+  ///   boundary_changes} (when on), boundary, groups, quadratic (with solver outputs),
+  ///   seconds {read, prepare, features, sizing, query, estimate, place, mesh, improve,
+  ///            delaunay_check, mesh_check, quality, groups, write, total,
   ///            mesh_stages {order, delaunay (all rounds), first_delaunay, classify, recover}},
   ///   size_fidelity {edges, mean_ratio, fraction_in_range, range [0.7, 1.4]},
   ///   quality {tets, inverted, min_dihedral, max_dihedral (degrees), mean_radius_ratio,
