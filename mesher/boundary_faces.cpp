@@ -108,69 +108,66 @@ ManifoldDefects manifold_defects(const std::vector<std::uint32_t>& verts) {
   return d;
 }
 
+std::uint8_t judge_face(const std::uint32_t* fv, const NodeSet& nodes, const PreparedSurface& surface,
+                        const SurfaceQuery& query, const SizingField& sizing, double tolerance,
+                        float* how_far) {
+  std::uint8_t w = 0;
+  for (int j = 0; j < 3; ++j)
+    if (nodes.kind[fv[j]] == NodeKind::interior) w |= kFaceInterior;
+  if (how_far) *how_far = 0;
+  if (w) return w;
+  const double *p0 = nodes.points.p(fv[0]), *p1 = nodes.points.p(fv[1]), *p2 = nodes.points.p(fv[2]);
+  const double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+  const double v[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+  const double fn[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  double c[3];
+  for (int k = 0; k < 3; ++k) c[k] = (p0[k] + p1[k] + p2[k]) / 3;
+  std::uint32_t facet = nodes.facet[fv[0]];
+  double dmax = 0;
+  const bool one_facet = facet != kNoFacet && nodes.facet[fv[1]] == facet && nodes.facet[fv[2]] == facet;
+  if (!one_facet) {
+    // The three vertices are not on one facet (a convex set): measure the distances.
+    double cp[3];
+    dmax = query.closest(c, cp, &facet);
+    const double* ends[3][2] = {{p0, p1}, {p1, p2}, {p2, p0}};
+    for (auto& ed : ends) {
+      const double m[3] = {(ed[0][0] + ed[1][0]) / 2, (ed[0][1] + ed[1][1]) / 2, (ed[0][2] + ed[1][2]) / 2};
+      dmax = std::max(dmax, query.distance(m));
+    }
+  }
+  const double h = sizing(c);
+  if (dmax > tolerance * h) w |= kFaceFar;
+  if (how_far) *how_far = float(dmax / h);
+  // Normal of the facet.
+  const SurfaceMesh& sm = surface.mesh;
+  const std::uint32_t* t = sm.tri(facet);
+  const double *a = sm.points.p(t[0]), *b = sm.points.p(t[1]), *cc = sm.points.p(t[2]);
+  const double fu[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double fw[3] = {cc[0] - a[0], cc[1] - a[1], cc[2] - a[2]};
+  const double n[3] = {fu[1] * fw[2] - fu[2] * fw[1], fu[2] * fw[0] - fu[0] * fw[2], fu[0] * fw[1] - fu[1] * fw[0]};
+  if (fn[0] * n[0] + fn[1] * n[1] + fn[2] * n[2] < 0) w |= kFaceAgainst;
+  return w;
+}
+
 BoundaryJudgement judge_boundary(const BoundaryFaces& faces, const NodeSet& nodes,
                                  const PreparedSurface& surface,
                                  const SurfaceQuery& query, const SizingField& sizing,
                                  double tolerance) {
   const std::size_t nf = faces.size();
-  std::vector<std::uint8_t> why(nf, 0);  // bit 0 interior vertex, 1 far, 2 facing inward
+  std::vector<std::uint8_t> why(nf, 0);  // kFace* bits
   std::vector<float> how_far(nf, 0);
-  const SurfaceMesh& sm = surface.mesh;
-  auto facet_normal = [&](std::uint32_t f, double* n) {
-    const std::uint32_t* t = sm.tri(f);
-    const double *a = sm.points.p(t[0]), *b = sm.points.p(t[1]), *c = sm.points.p(t[2]);
-    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    n[0] = u[1] * v[2] - u[2] * v[1];
-    n[1] = u[2] * v[0] - u[0] * v[2];
-    n[2] = u[0] * v[1] - u[1] * v[0];
-  };
   parallel_for(nf, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t f = b; f < e; ++f) {
-      const std::uint32_t* fv = &faces.verts[3 * f];
-      std::uint8_t w = 0;
-      for (int j = 0; j < 3; ++j)
-        if (nodes.kind[fv[j]] == NodeKind::interior) w |= 1;
-      if (w) {
-        why[f] = w;
-        continue;
-      }
-      const double *p0 = nodes.points.p(fv[0]), *p1 = nodes.points.p(fv[1]), *p2 = nodes.points.p(fv[2]);
-      const double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-      const double v[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-      const double fn[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-      double c[3];
-      for (int k = 0; k < 3; ++k) c[k] = (p0[k] + p1[k] + p2[k]) / 3;
-      std::uint32_t facet = nodes.facet[fv[0]];
-      double dmax = 0;
-      const bool one_facet = facet != kNoFacet && nodes.facet[fv[1]] == facet && nodes.facet[fv[2]] == facet;
-      if (!one_facet) {
-        // The three vertices are not on one facet (a convex set): measure the distances.
-        double cp[3];
-        dmax = query.closest(c, cp, &facet);
-        const double* ends[3][2] = {{p0, p1}, {p1, p2}, {p2, p0}};
-        for (auto& ed : ends) {
-          const double m[3] = {(ed[0][0] + ed[1][0]) / 2, (ed[0][1] + ed[1][1]) / 2, (ed[0][2] + ed[1][2]) / 2};
-          dmax = std::max(dmax, query.distance(m));
-        }
-      }
-      const double h = sizing(c);
-      if (dmax > tolerance * h) w |= 2;
-      how_far[f] = float(dmax / h);
-      double n[3];
-      facet_normal(facet, n);
-      if (fn[0] * n[0] + fn[1] * n[1] + fn[2] * n[2] < 0) w |= 4;
-      why[f] = w;
-    }
+    for (std::size_t f = b; f < e; ++f)
+      why[f] = judge_face(&faces.verts[3 * f], nodes, surface, query, sizing, tolerance, &how_far[f]);
   }, 256);
   BoundaryJudgement j;
   for (std::size_t f = 0; f < nf; ++f) {
     if (!why[f]) continue;
     j.bad_faces.push_back(std::uint32_t(f));
     std::ostringstream r;
-    if (why[f] & 1) r << "interior-kind vertex on the boundary";
-    if (why[f] & 2) r << (r.tellp() ? ", " : "") << "distance " << how_far[f] << " h from the surface";
-    if (why[f] & 4) r << (r.tellp() ? ", " : "") << "faces against the closest facet";
+    if (why[f] & kFaceInterior) r << "interior-kind vertex on the boundary";
+    if (why[f] & kFaceFar) r << (r.tellp() ? ", " : "") << "distance " << how_far[f] << " h from the surface";
+    if (why[f] & kFaceAgainst) r << (r.tellp() ? ", " : "") << "faces against the closest facet";
     j.reasons.push_back(r.str());
   }
   ManifoldDefects d = manifold_defects(faces.verts);

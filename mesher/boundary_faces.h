@@ -39,6 +39,17 @@ struct BoundaryJudgement {
   std::vector<std::uint32_t> faces_at_bad_edges, faces_at_bad_vertices;  ///< faces around them
 };
 
+/// What is wrong with one boundary face (bits; 0 = good).
+inline constexpr std::uint8_t kFaceInterior = 1;  ///< a vertex is interior-kind
+inline constexpr std::uint8_t kFaceFar = 2;       ///< farther than tolerance * h from the surface
+inline constexpr std::uint8_t kFaceAgainst = 4;   ///< normal against the closest facet's
+
+/// Judges one face (3 point ids, normal (b-a)x(c-a) pointing out of the solid) by the rules of
+/// judge_boundary; writes its distance / h to *how_far (0 if a vertex is interior-kind).
+std::uint8_t judge_face(const std::uint32_t* fv, const NodeSet& nodes, const PreparedSurface& surface,
+                        const SurfaceQuery& query, const SizingField& sizing, double tolerance,
+                        float* how_far = nullptr);
+
 /// Judges each face: bad if (a) a vertex is interior-kind, (b) its centroid or an edge midpoint
 /// is farther than tolerance * h(centroid) from the surface, (c) its normal points against
 /// the normal of the facet closest to its centroid. Then checks the faces form a closed

@@ -174,6 +174,201 @@ std::vector<std::uint8_t> classify(const Triangulation& tri, const NodeSet& node
 }
 
 // ---------------------------------------------------------------------------------------------
+// Folds. A tet whose four vertices are surface nodes is classified by the side of its centroid
+// alone. Where the surface bends or wiggles within one node spacing (the saddle-shaped inner
+// half of a torus near the top and bottom of the tube; rough scanned surfaces) such tets lie
+// across the surface, their centroids within the surface's own deviation from their faces, so
+// neighbouring ones fall on either side: the boundary folds, and the fold's faces point into the
+// solid (judge_boundary: "faces against the closest facet") or meet at non-manifold edges and
+// vertices. Steiner points do not undo a fold: its faces are caps (three surface nodes nearly
+// in a row), the closest surface point to such a face lies next to the middle node, so no
+// candidate is admissible, and every surface node added makes more tets of the same kind
+// (measured on a 400x200-quad torus at size 1: 188 folded faces before the first Steiner round,
+// 76 still there when no admissible point was left after 11 rounds; a rough one: 3734, 4134
+// after 12 rounds).
+//
+// A fold is undone by taking all-surface tets out of the solid (never by adding one: every kept
+// tet keeps its centroid strictly inside). Starting from an all-surface tet that owns a bad face
+// or a face at a non-manifold vertex, the cluster grows through every bad face it exposes and
+// through the all-surface tets at the non-manifold vertices it leaves, up to kMaxCluster tets;
+// a tet with an interior-kind vertex behind a bad exposed face stops it. The cluster is kept if
+// every face it exposes is good (judge_face: on the surface within tolerance, facing out) and
+// its vertices have fewer non-manifold ones than before (no more, if it started from a bad
+// face, which is gone); else it is undone. Sequential in tet order (deterministic); tets next to
+// a kept cluster are retried until nothing changes. Returns the number of tets taken out.
+std::size_t peel_folds(const Triangulation& tri, const NodeSet& nodes, const PreparedSurface& surface,
+                       const SurfaceQuery& query, const SizingField& sizing, double tolerance,
+                       const BoundaryFaces& bf, const BoundaryJudgement& judge,
+                       std::vector<std::uint8_t>& inside) {
+  const std::size_t n = tri.num_tets();
+  auto all_surface = [&](std::uint32_t t) {
+    for (int i = 0; i < 4; ++i)
+      if (nodes.kind[tri.v(t, i)] == NodeKind::interior) return false;
+    return true;
+  };
+  auto face_verts = [&](std::uint32_t t, int i, std::uint32_t* fv) {
+    for (int j = 0; j < 3; ++j) fv[j] = tri.v(t, kTetFace[i][j]);
+  };
+  auto bad_face = [&](std::uint32_t t, int i) {
+    std::uint32_t fv[3];
+    face_verts(t, i, fv);
+    return judge_face(fv, nodes, surface, query, sizing, tolerance) != 0;
+  };
+  // Candidates: the all-surface tets owning a bad face or a face at a non-manifold edge or
+  // vertex.
+  std::vector<std::uint32_t> work;
+  for (const std::vector<std::uint32_t>* list :
+       {&judge.bad_faces, &judge.faces_at_bad_edges, &judge.faces_at_bad_vertices})
+    for (std::uint32_t f : *list)
+      if (all_surface(bf.tet[f])) work.push_back(bf.tet[f]);
+  if (work.empty()) return 0;
+  // The boundary faces at each vertex (face reference 4 t + i of the inside tet), kept up to
+  // date while peeling, for the manifold test.
+  std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> at_vertex;
+  auto count_face = [&](std::uint32_t ref, int d) {
+    std::uint32_t fv[3];
+    face_verts(ref >> 2, int(ref & 3), fv);
+    for (std::uint32_t v : fv) {
+      std::vector<std::uint32_t>& l = at_vertex[v];
+      if (d > 0) {
+        l.push_back(ref);
+      } else {
+        auto it = std::find(l.begin(), l.end(), ref);
+        *it = l.back();
+        l.pop_back();
+      }
+    }
+  };
+  for (std::size_t t = 0; t < n; ++t) {
+    if (!inside[t]) continue;
+    for (int i = 0; i < 4; ++i)
+      if (!inside[tri.adj(t, i) >> 2]) count_face(std::uint32_t(4 * t + i), 1);
+  }
+  // The boundary is a 2-manifold at v: the edges opposite v in its faces form one cycle.
+  std::vector<std::uint32_t> link;
+  auto manifold_at = [&](std::uint32_t v) {
+    auto it = at_vertex.find(v);
+    if (it == at_vertex.end() || it->second.empty()) return true;
+    link.clear();
+    for (std::uint32_t ref : it->second) {
+      std::uint32_t fv[3];
+      face_verts(ref >> 2, int(ref & 3), fv);
+      const int j = fv[0] == v ? 0 : fv[1] == v ? 1 : 2;
+      link.push_back(fv[(j + 1) % 3]);  // directed link edge
+      link.push_back(fv[(j + 2) % 3]);
+    }
+    // One cycle: each link vertex starts exactly one edge and ends exactly one, and walking
+    // from the first edge visits them all.
+    const std::size_t m = link.size() / 2;
+    for (std::size_t a = 0; a < m; ++a) {
+      int starts = 0, ends = 0;
+      for (std::size_t b = 0; b < m; ++b) {
+        starts += link[2 * b] == link[2 * a];
+        ends += link[2 * b + 1] == link[2 * a];
+      }
+      if (starts != 1 || ends != 1) return false;
+    }
+    std::size_t steps = 0, e = 0;
+    do {
+      std::size_t b = 0;
+      while (link[2 * b] != link[2 * e + 1]) ++b;
+      e = b;
+      ++steps;
+    } while (e != 0 && steps <= m);
+    return steps == m;
+  };
+  auto peel_one = [&](std::uint32_t t, int d) {  // d = -1 peel, +1 undo
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t a = tri.adj(t, i);
+      if (!inside[a >> 2]) count_face(std::uint32_t(4 * t + i), d);
+      else count_face(a, -d);
+    }
+    inside[t] = d < 0 ? 0 : 1;
+  };
+  // Peels the all-surface tet t0 and, where that exposes a bad face of another all-surface tet
+  // (a fold more than one tet thick) or leaves a vertex non-manifold, the all-surface tets there
+  // too, up to kMaxCluster tets. Kept if every face it exposes is good and its vertices have
+  // fewer non-manifold ones than before (no more, if t0 owned a bad face: that face is gone);
+  // otherwise undone.
+  constexpr std::size_t kMaxCluster = 24;
+  std::vector<std::uint32_t> removed, stack;
+  std::vector<std::pair<std::uint32_t, bool>> was_manifold;  // vertices touched, before
+  auto touch = [&](std::uint32_t t) {
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t v = tri.v(t, i);
+      bool seen = false;
+      for (const auto& p : was_manifold) seen = seen || p.first == v;
+      if (!seen) was_manifold.push_back({v, manifold_at(v)});
+    }
+  };
+  auto try_peel = [&](std::uint32_t t0, bool owns_bad) {
+    removed.clear();
+    was_manifold.clear();
+    stack.assign(1, t0);
+    for (;;) {
+      bool ok = true;
+      while (ok && !stack.empty()) {
+        const std::uint32_t t = stack.back();
+        stack.pop_back();
+        if (!inside[t]) continue;
+        if (removed.size() == kMaxCluster) {
+          ok = false;
+          break;
+        }
+        touch(t);
+        peel_one(t, -1);
+        removed.push_back(t);
+        for (int i = 0; i < 4 && ok; ++i) {
+          const std::uint32_t a = tri.adj(t, i);
+          if (!inside[a >> 2] || !bad_face(a >> 2, int(a & 3))) continue;
+          ok = all_surface(a >> 2);  // a bad face of a tet that cannot be peeled
+          stack.push_back(a >> 2);
+        }
+      }
+      if (!ok) break;
+      std::size_t before = 0, after = 0;
+      for (const auto& [v, m] : was_manifold) {
+        before += !m;
+        after += !manifold_at(v);
+      }
+      if (owns_bad ? after <= before : after < before) return true;
+      for (const auto& [v, m] : was_manifold) {
+        if (manifold_at(v)) continue;
+        for (std::uint32_t ref : at_vertex[v])
+          if (all_surface(ref >> 2)) stack.push_back(ref >> 2);
+      }
+      if (stack.empty()) break;
+    }
+    for (std::size_t r = removed.size(); r-- > 0;) peel_one(removed[r], +1);
+    return false;
+  };
+  std::size_t peeled = 0;
+  while (!work.empty()) {
+    std::sort(work.begin(), work.end());
+    work.erase(std::unique(work.begin(), work.end()), work.end());
+    std::vector<std::uint32_t> next;
+    for (std::uint32_t t : work) {
+      if (!inside[t]) continue;
+      bool has_bad = false, at_defect = false;
+      for (int i = 0; i < 4 && !has_bad; ++i)
+        if (!inside[tri.adj(t, i) >> 2]) {
+          has_bad = bad_face(t, i);
+          for (int j = 0; j < 3 && !at_defect; ++j) at_defect = !manifold_at(tri.v(t, kTetFace[i][j]));
+        }
+      if (!(has_bad || at_defect) || !try_peel(t, has_bad)) continue;
+      peeled += removed.size();
+      for (std::uint32_t r : removed)
+        for (int i = 0; i < 4; ++i) {
+          const std::uint32_t u = tri.adj(r, i) >> 2;
+          if (inside[u] && all_surface(u)) next.push_back(u);  // may be peelable now
+        }
+    }
+    work.swap(next);
+  }
+  return peeled;
+}
+
+// ---------------------------------------------------------------------------------------------
 // A hash grid of points for "is there a node within r of p".
 class PointGrid {
  public:
@@ -285,6 +480,7 @@ VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query
   std::vector<std::uint32_t> pending_ids, pending_hints;  // Steiner points to insert, hints
   std::vector<std::uint8_t> inside;
   BoundaryFaces bf;
+  std::size_t folds_peeled = 0;  // all-surface tets taken out of the solid (peel_folds)
   for (int round = 0;; ++round) {
     if (round == 0 || rebuild) {
       dr = triangulate(nodes, options, st);
@@ -303,11 +499,19 @@ VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query
     if (options.progress) options.progress("classify", 1);
 
     sw.reset();
+    // 0.8 x the tolerance: the mesher samples each face at its centroid and edge midpoints,
+    // the independent check more densely, so the margin keeps its verdict the same.
+    const double tolerance = 0.8 * options.hausdorff_tolerance;
     bf = boundary_faces(dr.tri, inside);
-    const BoundaryJudgement judge =
-        // 0.8 x the tolerance: the mesher samples each face at its centroid and edge midpoints,
-        // the independent check more densely, so the margin keeps its verdict the same.
-        judge_boundary(bf, nodes, surface, query, sizing, 0.8 * options.hausdorff_tolerance);
+    BoundaryJudgement judge = judge_boundary(bf, nodes, surface, query, sizing, tolerance);
+    if (!judge.bad_faces.empty() || !judge.bad_vertices.empty() || !judge.bad_edges.empty()) {
+      const std::size_t peeled = peel_folds(dr.tri, nodes, surface, query, sizing, tolerance, bf, judge, inside);
+      if (peeled > 0) {
+        folds_peeled += peeled;
+        bf = boundary_faces(dr.tri, inside);
+        judge = judge_boundary(bf, nodes, surface, query, sizing, tolerance);
+      }
+    }
     // Kept tets that are flat at rounding level (4 nodes coplanar up to rounding, e.g. lattice
     // nodes next to surface nodes; all-surface ones are already outside): their interior
     // nodes are dropped, like interior nodes on boundary faces (measured: 1 such tet among
@@ -420,6 +624,7 @@ VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query
       std::ostringstream msg;
       msg << "mesh_volume: the boundary could not be recovered after " << round
           << " Steiner round(s)" << (progress_made ? "" : " (no admissible Steiner point left)")
+          << " and " << folds_peeled << " folded surface tet(s) taken out"
           << ": " << judge.bad_faces.size() << " bad boundary face(s), " << judge.bad_edges.size() / 2
           << " non-manifold edge(s), " << judge.bad_vertices.size() << " non-manifold vertex(es)";
       std::size_t shown = 0;
