@@ -24,9 +24,10 @@ double min_sine(const ImproveTets& m, const std::vector<std::uint32_t>& ids) {
 namespace {
 
 bool all_valid(const ImproveTets& m, const std::vector<std::uint32_t>& fresh) {
-  for (std::size_t k = 0; k < fresh.size(); k += 4)
-    if (!tet_valid(m.p(fresh[k]), m.p(fresh[k + 1]), m.p(fresh[k + 2]), m.p(fresh[k + 3])))
-      return false;
+  for (std::size_t k = 0; k < fresh.size(); k += 4) {
+    const double* p[4] = {m.p(fresh[k]), m.p(fresh[k + 1]), m.p(fresh[k + 2]), m.p(fresh[k + 3])};
+    if (!tet_valid(p[0], p[1], p[2], p[3]) || !m.inside_ok(&fresh[k], p)) return false;
+  }
   return true;
 }
 

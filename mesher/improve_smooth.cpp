@@ -28,6 +28,7 @@ void tri_normal(const double* a, const double* b, const double* c, double* n) {
 
 struct StarTet {
   const double* p[4];
+  std::uint32_t ids[4];
   int iv;  // position of the moving vertex
 };
 
@@ -73,7 +74,7 @@ class VertexStar {
     for (std::uint32_t t : star_) {
       const std::uint32_t* tv = m.v(t);
       StarTet s;
-      for (int k = 0; k < 4; ++k) s.p[k] = m.p(tv[k]);
+      for (int k = 0; k < 4; ++k) s.p[k] = m.p(tv[k]), s.ids[k] = tv[k];
       s.iv = index_in(tv, v);
       st_.push_back(s);
       for (int k = 0; k < 4; ++k) {
@@ -163,7 +164,7 @@ class VertexStar {
     for (const StarTet& s : st_) {
       const double* p[4] = {s.p[0], s.p[1], s.p[2], s.p[3]};
       p[s.iv] = x;
-      if (!tet_valid(p[0], p[1], p[2], p[3])) return false;
+      if (!tet_valid(p[0], p[1], p[2], p[3]) || !m_->inside_ok(s.ids, p)) return false;
     }
     if (!on_surface_) return true;
     for (std::size_t k = 0; k < bfaces_.size(); ++k) {

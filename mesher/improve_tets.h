@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "mesher/node_set.h"
+#include "mesher/surface_query.h"
 
 namespace kdmesh {
 
@@ -58,6 +59,24 @@ class ImproveTets {
   /// Returns false if the edge is on the boundary (the ring is open).
   bool edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b,
                  std::vector<std::uint32_t>& ring, std::vector<std::uint32_t>& tets) const;
+
+  /// The solid's surface, when set: a tet the pass creates (or changes by moving a vertex) with
+  /// at least two vertices on the surface must have its centroid strictly inside the solid
+  /// (exact ray parity), the rule of mesh_check. Such tets can lie across a curved or rough
+  /// surface, which no orientation test sees (regression: tori failed the mesh check after
+  /// the pass).
+  const SurfaceQuery* inside_query = nullptr;
+  /// False when ids (with positions p) form such a tet with its centroid not strictly inside;
+  /// true otherwise (and always when inside_query is not set).
+  bool inside_ok(const std::uint32_t* ids, const double* const* p) const {
+    if (!inside_query) return true;
+    int on_surface = 0;
+    for (int k = 0; k < 4; ++k) on_surface += nodes_->kind[ids[k]] != NodeKind::interior;
+    if (on_surface < 2) return true;
+    double c[3];
+    for (int i = 0; i < 3; ++i) c[i] = (p[0][i] + p[1][i] + p[2][i] + p[3][i]) / 4;
+    return inside_query->side(c) > 0;
+  }
 
   /// Writes the tets back (compacted, in slot order), the regions, and the boundary faces:
   /// the faces of mesh.boundary that are still boundary faces keep their order and vertex

@@ -222,6 +222,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
   ImproveStats st;
   const int total_stages = 1 + 2 * options.rounds + std::min(options.rounds, options.relax_rounds);
   ImproveTets m(mesh.nodes, mesh.tets, mesh.tet_region);
+  m.inside_query = &query;
   auto stage = [&](const std::string& name, std::size_t ops) {
     const double seconds = sw.seconds();
     ImproveStage s;
