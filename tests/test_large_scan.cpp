@@ -7,42 +7,18 @@
 #include <cmath>
 #include <numbers>
 
-#include "core/rng.h"
 #include "io/surface_io.h"
 #include "tests/support/scratch.h"
+#include "tests/support/torus.h"
 #include "tools/lib/mesh_job.h"
 
 namespace kdmesh {
 namespace {
 
-/// A torus (major radius R, minor r) as an nu x nv grid of quads, 2 nu nv outward triangles,
-/// each vertex moved radially (in the tube) by a seeded amount in [-a, a]. With a well below
-/// the grid step the surface stays embedded: the roughness tilts facets by at most
-/// atan(2a / step) and no facet can reach a non-neighbour.
-SurfaceMesh rough_torus(double R, double r, int nu, int nv, double a, std::uint64_t seed) {
-  SurfaceMesh m;
-  Rng rng(seed);
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      const double u = 2 * std::numbers::pi * i / nu, v = 2 * std::numbers::pi * j / nv;
-      const double rr = r + a * (2 * rng.uniform() - 1);
-      m.points.push_back((R + rr * std::cos(v)) * std::cos(u), (R + rr * std::cos(v)) * std::sin(u),
-                         rr * std::sin(v));
-    }
-  auto id = [&](int i, int j) { return std::uint32_t((i % nu) * nv + (j % nv)); };
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      const std::uint32_t p = id(i, j), q = id(i + 1, j), s = id(i + 1, j + 1), t = id(i, j + 1);
-      m.tris.insert(m.tris.end(), {p, q, s, p, s, t});
-    }
-  return m;
-}
-
 TEST(LargeScan, MillionTriangleTorusMeshesEndToEnd) {
   const double R = 40, r = 10;
   const int nu = 1000, nv = 500;  // 1,000,000 triangles
-  const double step = 2 * std::numbers::pi * r / nv;  // ~0.126 around the tube
-  const SurfaceMesh scan = rough_torus(R, r, nu, nv, 0.05 * step, 7);
+  const SurfaceMesh scan = test::rough_torus(R, r, nu, nv, 0.05, 7);  // roughness 5% of the step
   ASSERT_EQ(scan.num_tris(), 1000000u);
   const std::string stl = test::scratch_path("large_scan", ".stl");
   write_stl(scan, stl);

@@ -11,43 +11,18 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <numbers>
 #include <string>
 
-#include "core/rng.h"
 #include "mesher/boundary_faces.h"
 #include "mesher/mesh_check.h"
 #include "mesher/node_placement.h"
 #include "mesher/surface_prepare.h"
 #include "mesher/volume_mesh.h"
 #include "sizing/features.h"
+#include "tests/support/torus.h"
 
 namespace kdmesh {
 namespace {
-
-/// A torus: tube radius r around a circle of radius R in the xy plane,
-/// nu x nv quads (u around the z axis, v around the tube), each split along its (i,j)-(i+1,j+1)
-/// diagonal; the tube radius of each grid point is r + roughness * step * U(-1, 1), step = the
-/// grid step around the tube. Coordinates rounded to float, as an STL file stores them.
-SurfaceMesh torus(double R, double r, int nu, int nv, double roughness, std::uint64_t seed) {
-  SurfaceMesh m;
-  Rng rng(seed);
-  const double step = 2 * std::numbers::pi * r / nv;
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      const double u = 2 * std::numbers::pi * i / nu, v = 2 * std::numbers::pi * j / nv;
-      const double rr = r + roughness * step * rng.uniform(-1, 1);
-      m.points.push_back(float((R + rr * std::cos(v)) * std::cos(u)),
-                         float((R + rr * std::cos(v)) * std::sin(u)), float(rr * std::sin(v)));
-    }
-  auto id = [&](int i, int j) { return std::uint32_t((i % nu) * nv + (j % nv)); };
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      const std::uint32_t p = id(i, j), q = id(i + 1, j), s = id(i + 1, j + 1), t = id(i, j + 1);
-      m.tris.insert(m.tris.end(), {p, q, s, p, s, t});
-    }
-  return m;
-}
 
 /// Meshes the torus through the pipeline (as kdmesh mesh --size h --sharp-angle 60) and checks
 /// the result; fails the test if mesh_volume throws.
@@ -103,13 +78,13 @@ void mesh_and_check(const SurfaceMesh& raw, double h, const std::string& name) {
 
 // The smooth torus R = 40, r = 10 of 200 x 100 quads at h = 2.5.
 TEST(TorusRecovery, SmoothTorusIsMeshed) {
-  mesh_and_check(torus(40, 10, 200, 100, 0, 7), 2.5, "smooth torus");
+  mesh_and_check(test::rough_torus(40, 10, 200, 100, 0, 7), 2.5, "smooth torus");
 }
 
 // The same torus with radial noise of 5% of the grid step (100 x 50 quads): the bumps make
 // all-surface tets straddle the surface everywhere.
 TEST(TorusRecovery, RoughTorusIsMeshed) {
-  mesh_and_check(torus(40, 10, 100, 50, 0.05, 7), 2.5, "rough torus");
+  mesh_and_check(test::rough_torus(40, 10, 100, 50, 0.05, 7), 2.5, "rough torus");
 }
 
 // judge_face, which the fold removal uses to accept a peel, on one facet of a unit cube's
