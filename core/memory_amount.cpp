@@ -52,4 +52,8 @@ double physical_memory_bytes() {
   return pages > 0 && page > 0 ? double(pages) * double(page) : 0;
 }
 
+double effective_memory_limit(double option) {
+  return option < 0 ? 0 : option > 0 ? option : physical_memory_bytes();
+}
+
 }  // namespace kdmesh

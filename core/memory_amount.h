@@ -16,4 +16,8 @@ double parse_memory_amount(const std::string& text, const std::string& what);
 /// The machine's physical memory in bytes (0 if unknown).
 double physical_memory_bytes();
 
+/// The limit in force for a parsed --max-memory value: `option` > 0 as is, 0 (not given) the
+/// machine's physical memory, < 0 ("none") no limit, returned as 0.
+double effective_memory_limit(double option);
+
 }  // namespace kdmesh

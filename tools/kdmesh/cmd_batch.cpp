@@ -15,7 +15,7 @@
 
 #include "core/error.h"
 #include "core/timer.h"
-#include "mesher/resource_estimate.h"
+#include "core/memory_amount.h"
 #include "tools/kdmesh/cli.h"
 #include "tools/lib/job_config.h"
 #include "tools/lib/job_process.h"

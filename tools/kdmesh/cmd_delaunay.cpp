@@ -13,7 +13,7 @@
 #include "mesher/delaunay.h"
 #include "mesher/order.h"
 #include "mesher/reference_delaunay.h"
-#include "mesher/resource_estimate.h"
+#include "core/memory_amount.h"
 #include "mesher/tet_adjacency.h"
 #include "mesher/tet_compare.h"
 #include "tools/kdmesh/cli.h"
@@ -41,7 +41,7 @@ constexpr double kDelaunayBytesPerPoint = 300, kOutputBytesPerPoint = 720, kChec
 /// Prints the memory estimate and refuses (ResourceError) a run that would exceed the limit.
 void check_memory(const Options& o, std::size_t n, nlohmann::json& j) {
   const double limit_option = o.max_memory.empty() ? 0 : parse_memory_amount(o.max_memory, "--max-memory");
-  const double limit = limit_option < 0 ? 0 : limit_option > 0 ? limit_option : physical_memory_bytes();
+  const double limit = effective_memory_limit(limit_option);
   const double per_point = kDelaunayBytesPerPoint + (o.output.empty() ? 0 : kOutputBytesPerPoint) +
                            (o.check ? kCheckBytesPerPoint : 0);
   const double bytes = 16e6 + per_point * double(n);

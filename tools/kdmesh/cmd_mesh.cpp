@@ -10,7 +10,7 @@
 
 #include "core/error.h"
 #include "mesher/order.h"
-#include "mesher/resource_estimate.h"
+#include "core/memory_amount.h"
 #include "mesher/surface_repair.h"
 #include "tools/kdmesh/cli.h"
 #include "tools/lib/mesh_job.h"

@@ -154,6 +154,12 @@ class Loader {
     return x;
   }
 
+  bool boolean(const YAML::Node& v, const std::string& what) const {
+    if (!v.IsScalar() || (v.Scalar() != "true" && v.Scalar() != "false"))
+      fail(v, what + ": expected true or false, got " + describe(v));
+    return v.Scalar() == "true";
+  }
+
   std::string string(const YAML::Node& v, const std::string& what) const {
     if (!v.IsScalar() || v.Scalar().empty())
       fail(v, what + ": expected a non-empty string, got " + describe(v));
@@ -369,18 +375,10 @@ class Loader {
       if (!g.IsSequence()) fail(g, key("groups") + ": expected a list, got " + describe(g));
       for (std::size_t i = 0; i < g.size(); ++i) job.groups.push_back(group(g[i], where + ": groups[" + std::to_string(i) + "]"));
     }
-    if (e.count("patch_groups")) {
-      const YAML::Node v = e.at("patch_groups").value;
-      if (!v.IsScalar() || (v.Scalar() != "true" && v.Scalar() != "false"))
-        fail(v, key("patch_groups") + ": expected true or false, got " + describe(v));
-      job.group_options.patch_groups = job.group_options.curve_groups = v.Scalar() == "true";
-    }
-    if (e.count("improve")) {
-      const YAML::Node v = e.at("improve").value;
-      if (!v.IsScalar() || (v.Scalar() != "true" && v.Scalar() != "false"))
-        fail(v, key("improve") + ": expected true or false, got " + describe(v));
-      job.improve = v.Scalar() == "true";
-    }
+    if (e.count("patch_groups"))
+      job.group_options.patch_groups = job.group_options.curve_groups =
+          boolean(e.at("patch_groups").value, key("patch_groups"));
+    if (e.count("improve")) job.improve = boolean(e.at("improve").value, key("improve"));
     if (e.count("element_order")) {
       const YAML::Node v = e.at("element_order").value;
       const std::uint64_t n = unsigned_integer(v, key("element_order"));

@@ -226,7 +226,7 @@ template <class Log>
 void check_memory_estimate(const MeshJob& job, const PreparedSurface& surface, const SurfaceQuery& query,
                            const SizingField& sizing, nlohmann::json& j, const Log& log) {
   Stopwatch clock;
-  const double limit = job.max_memory < 0 ? 0 : job.max_memory > 0 ? job.max_memory : physical_memory_bytes();
+  const double limit = effective_memory_limit(job.max_memory);
   // Beyond twice the limit the exact excess does not matter: stop integrating there.
   const double cap = limit > 0 ? std::max(1e6, 2 * limit / kBytesPerNode) : 2e9;
   const ResourceEstimate e = estimate_resources(surface, query, sizing, cap);
