@@ -2,9 +2,11 @@
 // (internal to io/).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
+#include <charconv>
 #include <string>
 #include <string_view>
 #include <cstddef>
+#include <system_error>
 
 namespace kdmesh {
 
@@ -33,6 +35,16 @@ class FileWriter {
 /// Writes `bytes` as the whole file `path`, atomically (core/atomic_file.h: a temporary file
 /// beside it, renamed into place). OutputErrors as FileWriter's.
 void write_file_atomically(const std::string& path, std::string_view bytes);
+
+/// Parses the whole of `tok` as a number of type T with std::from_chars (locale independent),
+/// also accepting a leading '+', which from_chars alone rejects. False if `tok` is not such a
+/// number or does not fit in T.
+template <class T>
+bool parse_whole_token(std::string_view tok, T& value) {
+  if (tok.size() > 1 && tok[0] == '+' && tok[1] != '-' && tok[1] != '+') tok.remove_prefix(1);
+  const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), value);
+  return ec == std::errc() && ptr == tok.data() + tok.size();
+}
 
 /// A token quoted for an error message: 'tok', cut to 40 characters ('...' after the cut),
 /// unprintable bytes shown as '?'.

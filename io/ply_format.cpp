@@ -17,13 +17,6 @@ namespace {
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
-/// Parses a whole token as a non-negative integer (a leading '+' allowed).
-bool parse_count(std::string_view tok, std::uint64_t& v) {
-  if (tok.size() > 1 && tok[0] == '+' && tok[1] != '-') tok.remove_prefix(1);
-  const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
-  return ec == std::errc() && ptr == tok.data() + tok.size();
-}
-
 bool parse_ply_type(std::string_view s, PlyType& t) {
   struct Name {
     std::string_view name;
@@ -145,7 +138,7 @@ PlyHeader parse_ply_header(const std::string& path, std::string_view data) {
       have_format = true;
     } else if (key == "element") {
       PlyElement e;
-      if (tok.size() != 3 || !parse_count(tok[2], e.count))
+      if (tok.size() != 3 || !parse_whole_token(tok[2], e.count))
         throw bad("expected 'element <name> <count>' with a non-negative count");
       e.name = tok[1];
       e.line = ln;

@@ -128,14 +128,6 @@ bool parse_coordinate(std::string_view tok, double& value, std::string& why) {
   return true;
 }
 
-/// Parses a whole token as an integer of type T; false if it is not one or does not fit.
-template <class T>
-bool parse_integer(std::string_view tok, T& value) {
-  if (tok.size() > 1 && tok[0] == '+' && tok[1] != '-') tok.remove_prefix(1);
-  const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), value);
-  return ec == std::errc() && ptr == tok.data() + tok.size();
-}
-
 /// Parses x, y, z tokens and appends the point; throws InputError at `line` on failure.
 void append_point(PointSet& out, const std::string& path, std::uint64_t line,
                   const std::string_view* tok) {
@@ -230,7 +222,7 @@ void walk_ascii_element(const std::string& path, const PlyElement& e, LineCursor
         ++k;
       } else {
         std::uint64_t n;
-        if (!parse_integer(tok[k], n))
+        if (!parse_whole_token(tok[k], n))
           throw InputError(path, ln,
                            "list length " + quote_token(tok[k]) + " of property '" + prop.name +
                                "' is not a non-negative integer");
@@ -295,8 +287,8 @@ PointSet read_tetgen_node(const std::string& path) {
   std::array<std::string_view, 4> h;
   const std::uint64_t header_line = lines.line();
   std::uint64_t count = 0, dim = 0, nattr = 0, nmark = 0;
-  if (split(line, h) != 4 || !parse_integer(h[0], count) || !parse_integer(h[1], dim) ||
-      !parse_integer(h[2], nattr) || !parse_integer(h[3], nmark))
+  if (split(line, h) != 4 || !parse_whole_token(h[0], count) || !parse_whole_token(h[1], dim) ||
+      !parse_whole_token(h[2], nattr) || !parse_whole_token(h[3], nmark))
     throw InputError(path, header_line,
                      "bad .node header " + quote_token(line) +
                          ": expected '<#points> <dimension> <#attributes> <#boundary markers>' "
@@ -329,7 +321,7 @@ PointSet read_tetgen_node(const std::string& path) {
                            std::to_string(nattr) + " attributes + " + std::to_string(nmark) +
                            " markers), found " + std::to_string(n));
     std::int64_t index;
-    if (!parse_integer(tok[0], index))
+    if (!parse_whole_token(tok[0], index))
       throw InputError(path, ln, "point index " + quote_token(tok[0]) + " is not an integer");
     if (i == 0) {
       if (index != 0 && index != 1)

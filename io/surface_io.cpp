@@ -160,20 +160,6 @@ class Tokens {
   std::uint64_t line_;
 };
 
-/// Parses a whole token as a double (a leading '+' allowed). False if it is not a number.
-bool parse_double(std::string_view tok, double& v) {
-  if (tok.size() > 1 && tok[0] == '+' && tok[1] != '-' && tok[1] != '+') tok.remove_prefix(1);
-  const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
-  return ec == std::errc() && ptr == tok.data() + tok.size();
-}
-
-template <class T>
-bool parse_integer(std::string_view tok, T& v) {
-  if (tok.size() > 1 && tok[0] == '+' && tok[1] != '-') tok.remove_prefix(1);
-  const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
-  return ec == std::errc() && ptr == tok.data() + tok.size();
-}
-
 bool iequals(std::string_view a, std::string_view b) {
   if (a.size() != b.size()) return false;
   for (std::size_t i = 0; i < a.size(); ++i)
@@ -268,7 +254,7 @@ SurfaceMesh read_stl_ascii(const std::string& path, std::string_view data) {
     for (int k = 0; k < 3; ++k) {  // the normal is recomputed downstream; only its syntax matters
       double v;
       const std::string_view n = tok.next();
-      if (!parse_double(n, v))
+      if (!parse_whole_token(n, v))
         throw InputError(path, tok.line(), "facet " + std::to_string(facet) + " (0-based): normal component " +
                                                (n.empty() ? std::string("missing") : quote_token_printable(n)) + " is not a number");
     }
@@ -280,7 +266,7 @@ SurfaceMesh read_stl_ascii(const std::string& path, std::string_view data) {
       double c[3];
       for (int j = 0; j < 3; ++j) {
         const std::string_view n = tok.next();
-        if (!parse_double(n, c[j]))
+        if (!parse_whole_token(n, c[j]))
           throw InputError(path, tok.line(),
                            "facet " + std::to_string(facet) + " (0-based), corner " +
                                std::to_string(k) + ": coordinate " +
@@ -409,7 +395,7 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
           std::string_view t = value();
           if (!p.is_list) {
             double v;
-            if (!parse_double(t, v))
+            if (!parse_whole_token(t, v))
               throw InputError(path, line, "element '" + e.name + "' record " + std::to_string(i) +
                                                ": property '" + p.name + "' value " + quote_token_printable(t) +
                                                " is not a number");
@@ -422,7 +408,7 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
             continue;
           }
           std::uint64_t n;
-          if (!parse_integer(t, n))
+          if (!parse_whole_token(t, n))
             throw InputError(path, line, "element '" + e.name + "' record " + std::to_string(i) +
                                              ": list length " + quote_token_printable(t) + " is not a non-negative integer");
           if (n > tok.remaining()) throw eof();
@@ -430,13 +416,13 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
             t = value();
             if (is_face && p.role == kPlyFaceIndices) {
               std::int64_t v;
-              if (!parse_integer(t, v))
+              if (!parse_whole_token(t, v))
                 throw InputError(path, line, "face " + std::to_string(i) + " (0-based): vertex index " +
                                                  quote_token_printable(t) + " is not an integer");
               sink.index(v, i, line, where);
             } else {
               double v;
-              if (!parse_double(t, v))
+              if (!parse_whole_token(t, v))
                 throw InputError(path, line, "element '" + e.name + "' record " + std::to_string(i) +
                                                  ": list item " + quote_token_printable(t) + " is not a number");
             }

@@ -16,13 +16,6 @@ bool is_space(char c) {
   return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f';
 }
 
-template <class T>
-bool parse_whole(std::string_view tok, T& v) {
-  if (tok.size() > 1 && tok[0] == '+' && tok[1] != '-' && tok[1] != '+') tok.remove_prefix(1);
-  const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
-  return ec == std::errc() && ptr == tok.data() + tok.size();
-}
-
 }  // namespace
 
 std::string quoted(std::string_view tok) { return quote_token_printable(tok); }
@@ -87,14 +80,14 @@ bool TextScanner::skip_past(std::string_view needle) {
 std::int64_t TextScanner::int64(const char* what) {
   const std::string_view tok = token(what);
   std::int64_t v;
-  if (!parse_whole(tok, v)) fail(std::string(what) + ": " + quoted(tok) + " is not an integer");
+  if (!parse_whole_token(tok, v)) fail(std::string(what) + ": " + quoted(tok) + " is not an integer");
   return v;
 }
 
 std::uint64_t TextScanner::uint64(const char* what) {
   const std::string_view tok = token(what);
   std::uint64_t v;
-  if (!parse_whole(tok, v))
+  if (!parse_whole_token(tok, v))
     fail(std::string(what) + ": " + quoted(tok) + " is not a non-negative integer");
   return v;
 }
@@ -110,7 +103,7 @@ std::uint64_t TextScanner::count(const char* what, std::uint64_t max) {
 double TextScanner::real(const char* what) {
   const std::string_view tok = token(what);
   double v;
-  if (!parse_whole(tok, v)) fail(std::string(what) + ": " + quoted(tok) + " is not a number");
+  if (!parse_whole_token(tok, v)) fail(std::string(what) + ": " + quoted(tok) + " is not a number");
   if (!std::isfinite(v)) fail(std::string(what) + ": non-finite value " + quoted(tok));
   return v;
 }
