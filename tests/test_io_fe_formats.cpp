@@ -26,6 +26,7 @@
 #include "io/medit_writer.h"
 #include "io/msh_reader.h"
 #include "io/msh_writer.h"
+#include "tests/support/clients.h"
 #include "tests/support/scratch.h"
 
 namespace kdmesh {
@@ -249,24 +250,14 @@ void expect_same_mesh(const FeMesh& a, const FeMesh& b) {
   }
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test::have_command;
+using test::have_meshio;
+using test::ToolRun;
 
-void spit(const std::string& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out << bytes;
-}
-
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> out;
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);) out.push_back(line);
-  return out;
-}
+std::string slurp(const std::string& path) { return test::read_text(path); }
+void spit(const std::string& path, const std::string& bytes) { test::write_text_file(path, bytes); }
+std::vector<std::string> lines_of(const std::string& text) { return test::text_lines(text); }
+ToolRun run(const std::string& cmd, const std::string& log_base) { return test::run_tool(cmd, log_base); }
 
 std::string scratch(const std::string& ext) { return test::scratch_path("io_fe_formats", ext); }
 
@@ -715,26 +706,6 @@ TEST(FeReaders, TruncatedAndCorruptedFilesNeverCrash) {
 // Real clients: gmsh, meshio (Debian python3-meshio, through /usr/bin/python3), ccx
 // =============================================================================================
 
-struct ToolRun {
-  int code;
-  std::string out;  ///< stdout and stderr together
-};
-
-/// Runs `cmd` through the shell with stdout and stderr captured to a file beside `log_base`.
-ToolRun run(const std::string& cmd, const std::string& log_base) {
-  const std::string log = log_base + ".log";
-  const int status = std::system((cmd + " >" + log + " 2>&1").c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(log)};
-}
-
-bool have_command(const std::string& cmd) {
-  return std::system(("command -v " + cmd + " >/dev/null 2>&1").c_str()) == 0;
-}
-
-bool have_meshio() {
-  return std::system("/usr/bin/python3 -c 'import meshio' >/dev/null 2>&1") == 0;
-}
-
 /// The "Info : minJ/maxJ = worst, avg, best" and "minJ = min, avg, max" figures of Gmsh's
 /// AnalyseMeshQuality plugin for the tets of `msh`.
 struct GmshQuality {
@@ -830,7 +801,7 @@ void check_with_gmsh(const FeMesh& mesh, const std::string& file, bool repeats) 
 }
 
 TEST(RealClients, GmshReadsMshAndMedit) {
-  if (!have_command("gmsh")) GTEST_SKIP() << "gmsh is not on PATH";
+  KDMESH_NEED_CLIENT(have_command("gmsh"), "gmsh");
   for (const int order : {1, 2}) {
     const FeMesh mesh = cube_mesh(2, order);
     for (const MshOptions o : {MshOptions{41, false}, MshOptions{41, true}, MshOptions{22, false},
@@ -849,7 +820,7 @@ TEST(RealClients, GmshReadsMshAndMedit) {
 }
 
 TEST(RealClients, GmshGeneratedTet10ReadsWithMidnodesInPlace) {
-  if (!have_command("gmsh")) GTEST_SKIP() << "gmsh is not on PATH";
+  KDMESH_NEED_CLIENT(have_command("gmsh"), "gmsh");
   const std::string geo = scratch(".geo");
   spit(geo, "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 2, 3};\n"
             "Physical Volume(\"body\") = {1};\nPhysical Surface(\"skin\") = {1, 2, 3, 4, 5, 6};\n"
@@ -931,7 +902,7 @@ long num(const std::map<std::string, std::vector<std::string>>& view, const std:
 }
 
 TEST(RealClients, MeshioReadsMshInpAndMedit) {
-  if (!have_meshio()) GTEST_SKIP() << "/usr/bin/python3 cannot import meshio";
+  KDMESH_NEED_CLIENT(have_meshio(), "meshio (python3-meshio)");
   for (const int order : {1, 2}) {
     const FeMesh mesh = cube_mesh(2, order);
     const std::string tet = order == 2 ? "cells_tetra10" : "cells_tetra";
@@ -1056,12 +1027,12 @@ void run_uniaxial_bar(int order) {
 }
 
 TEST(RealClients, CalculixUniaxialBarC3D4) {
-  if (!have_command("ccx")) GTEST_SKIP() << "ccx (CalculiX) is not on PATH";
+  KDMESH_NEED_CLIENT(have_command("ccx"), "ccx");
   run_uniaxial_bar(1);
 }
 
 TEST(RealClients, CalculixUniaxialBarC3D10) {
-  if (!have_command("ccx")) GTEST_SKIP() << "ccx (CalculiX) is not on PATH";
+  KDMESH_NEED_CLIENT(have_command("ccx"), "ccx");
   run_uniaxial_bar(2);
 }
 
