@@ -88,6 +88,7 @@ void check_names(const FeMesh& mesh, const InpOptions& options) {
                          "' has a character outside [A-Za-z0-9_-]");
   };
   check_one(options.all_elset, "the all-tets ELSET name");
+  check_one(options.all_nset, "the all-nodes NSET name");
   if (options.heading.find_first_of("\r\n") != std::string::npos)
     throw UsageError("write_inp: the heading has a line break");
   std::vector<std::pair<std::string, std::size_t>> seen;
@@ -102,11 +103,15 @@ void check_names(const FeMesh& mesh, const InpOptions& options) {
                        mesh.groups[seen[i].second].name +
                        "' have the same Abaqus set name (names are case-insensitive and every "
                        "group gets an NSET)");
-  const std::string all = upper(options.all_elset);
-  for (const auto& [name, g] : seen)
-    if (name == all)
+  const std::string all_tets = upper(options.all_elset), all_nodes = upper(options.all_nset);
+  for (const auto& [name, g] : seen) {
+    if (name == all_tets)
       throw UsageError("write_inp: group '" + mesh.groups[g].name +
                        "' has the name of the all-tets ELSET '" + options.all_elset + "'");
+    if (name == all_nodes)
+      throw UsageError("write_inp: group '" + mesh.groups[g].name +
+                       "' has the name of the all-nodes NSET '" + options.all_nset + "'");
+  }
 }
 
 /// Open-addressing table from sorted corner triples to slots 0..n-1.
@@ -278,7 +283,7 @@ void write_inp(const FeMesh& mesh, const std::string& path, const InpOptions& op
       .put(" elements, ").put_uint(mesh.groups.size()).put(" groups\n");
   s.put("*HEADING\n").put(options.heading).put('\n');
 
-  s.put("*NODE\n");
+  s.put("*NODE, NSET=").put(options.all_nset).put('\n');
   for (std::size_t n = 0; n < np; ++n) {
     const double* p = mesh.points.p(std::uint32_t(n));
     s.put_uint(n + 1);

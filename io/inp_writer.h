@@ -11,11 +11,12 @@ namespace kdmesh {
 struct InpOptions {
   std::string heading = "kdmesh";  ///< the *HEADING line (one line, no line breaks)
   std::string all_elset = "EALL";  ///< name of the ELSET holding every tet
+  std::string all_nset = "NALL";   ///< name of the NSET holding every node
 };
 
 /// Writes the mesh part of an Abaqus / CalculiX input deck, atomically:
 ///   *HEADING
-///   *NODE                                  node n = point id + 1
+///   *NODE, NSET=NALL                       node n = point id + 1
 ///   *ELEMENT, TYPE=C3D4|C3D10, ELSET=EALL  element t = tet index + 1 (FeMesh's node order is
 ///                                          Abaqus's for both types)
 ///   per group of dim 3:  *ELSET (its tets) and *NSET (their nodes)
@@ -36,7 +37,7 @@ struct InpOptions {
 ///
 /// Group names are used as set names. Because Abaqus names are case-insensitive and a group of
 /// each dimension gets an NSET, names must be unique ignoring case over all groups, at most 80
-/// characters, and must not equal the all-tets ELSET name (case-insensitively).
+/// characters, and must not equal the all-tets ELSET or all-nodes NSET name (case-insensitively).
 /// Throws UsageError for an invalid mesh (see index_fe_mesh) or names, and for a group face
 /// that is not a face of any tet (naming the face, its corners and its group); OutputError
 /// if the file cannot be written.

@@ -221,19 +221,40 @@ std::array<std::uint64_t, 4> element_tag_base(const FeMesh& mesh) {
   return {0, mesh.num_tets() + mesh.num_faces(), mesh.num_tets(), 0};
 }
 
-void write_elements_41(MshOut& out, const FeMesh& mesh, const FeIndex& index) {
+void write_elements_41(MshOut& out, const FeMesh& mesh, const FeIndex& index, bool save_all) {
   const auto base = element_tag_base(mesh);
-  const std::uint64_t total = mesh.num_tets() + mesh.num_faces() + mesh.num_edges();
+  // Gmsh's rule (its Mesh.SaveAll = 0): once the mesh has physical groups, only the elements of
+  // entities in some group are saved. meshio 5 also needs it: it refuses a 4.1 file in which
+  // some element blocks have physical tags and others have none.
+  const bool grouped_only = !save_all && !mesh.groups.empty();
+  auto written = [&](const EntityTable& t, std::size_t k) {
+    return !grouped_only || t.gstart[k + 1] > t.gstart[k];
+  };
+  std::uint64_t blocks = 0, total = 0;
+  std::uint64_t min_tag = std::numeric_limits<std::uint64_t>::max(), max_tag = 0;
+  for (int d = 1; d <= 3; ++d) {
+    const EntityTable& t = index.dim[d];
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      if (!written(t, k)) continue;
+      ++blocks;
+      total += t.num_elements(k);
+      for (std::size_t j = t.start[k]; j < t.start[k + 1]; ++j) {
+        min_tag = std::min<std::uint64_t>(min_tag, base[d] + t.element_of[j] + 1);
+        max_tag = std::max<std::uint64_t>(max_tag, base[d] + t.element_of[j] + 1);
+      }
+    }
+  }
   out.text("$Elements\n");
-  out.size(index.dim[1].size() + index.dim[2].size() + index.dim[3].size(), ' ');
+  out.size(blocks, ' ');
   out.size(total, ' ');
-  out.size(total ? 1 : 0, ' ');
-  out.size(total, '\n');
+  out.size(total ? min_tag : 0, ' ');
+  out.size(total ? max_tag : 0, '\n');
   for (int d = 1; d <= 3; ++d) {
     const EntityTable& t = index.dim[d];
     const auto& conn = connectivity(mesh, d);
     const int nn = nodes_per_element(mesh, d);
     for (std::size_t k = 0; k < t.size(); ++k) {
+      if (!written(t, k)) continue;
       out.integer(d, ' ');
       out.integer(std::int64_t(t.ids[k]) + 1, ' ');
       out.integer(gmsh_type(d, mesh.order), ' ');
@@ -372,7 +393,7 @@ void write_msh(const FeMesh& mesh, const std::string& path, MshOptions options) 
     write_physical_names(sink, mesh);
     write_entities(out, mesh, index);
     write_nodes_41(out, mesh, index);
-    write_elements_41(out, mesh, index);
+    write_elements_41(out, mesh, index, options.save_all);
   } else {
     write_header(out, "2.2");
     write_physical_names(sink, mesh);

@@ -10,6 +10,8 @@ namespace kdmesh {
 struct MshOptions {
   int version = 41;     ///< 41 (MSH 4.1) or 22 (MSH 2.2)
   bool binary = false;  ///< binary instead of ASCII (native byte order, 8-byte size_t)
+  /// MSH 4.1: also write the elements of entities in no group (Gmsh's Mesh.SaveAll = 1).
+  bool save_all = false;
 };
 
 /// Writes `mesh` as a Gmsh MSH file, atomically (temporary file + rename).
@@ -30,6 +32,11 @@ struct MshOptions {
 /// is written in the $Nodes block of exactly one entity: the curve of an edge using it if any,
 /// else the surface of a face using it, else the volume of a tet (lowest entity id first);
 /// points used by no element go to the first volume (else surface, else curve).
+/// Elements of MSH 4.1: when the mesh has groups, only the elements of entities that belong to
+/// a group of their dimension are written, unless options.save_all (Gmsh does the same by
+/// default; meshio 5 cannot read a 4.1 file mixing element blocks with and without physical
+/// tags). Element tags keep their numbering, so they may have gaps; $Entities and $Nodes still
+/// list every entity and every point.
 /// MSH 2.2: physical and elementary tags per element; as Gmsh itself does, an element whose
 /// entity belongs to k > 1 groups is written k times (once per physical tag; the copies get
 /// tags after all others), and an element of an entity in no group once with physical 0.

@@ -297,6 +297,43 @@ TEST(MeditFormat, RoundTripOrder1And2) {
   }
 }
 
+/// The cube mesh without the groups "xmin" and "sides": side entity kSide0 then belongs to no
+/// group.
+FeMesh cube_without_xmin_group(int order) {
+  FeMesh m = cube_mesh(2, order);
+  for (const char* name : {"xmin", "sides"}) {
+    const auto it = std::find_if(m.groups.begin(), m.groups.end(), [&](const FeGroup& g) { return g.name == name; });
+    EXPECT_NE(it, m.groups.end()) << name;
+    if (it != m.groups.end()) m.groups.erase(it);
+  }
+  for (const FeGroup& g : m.groups)
+    EXPECT_FALSE(g.dim == 2 && std::count(g.entities.begin(), g.entities.end(), kSide0)) << g.name;
+  return m;
+}
+
+TEST(MshFormat, Msh41WritesOnlyGroupedEntitiesUnlessSaveAll) {
+  const FeMesh mesh = cube_without_xmin_group(1);
+  const auto xmin_faces = std::size_t(std::count(mesh.face_entity.begin(), mesh.face_entity.end(), kSide0));
+  ASSERT_GT(xmin_faces, 0u);
+  for (const bool binary : {false, true}) {
+    const std::string path = scratch(".msh");
+    write_msh(mesh, path, {41, binary});  // Gmsh's default: entities in no group are not saved
+    const FeMesh grouped = read_msh(path);
+    EXPECT_EQ(grouped.points.size(), mesh.points.size());
+    EXPECT_EQ(grouped.num_tets(), mesh.num_tets());
+    EXPECT_EQ(grouped.num_faces(), mesh.num_faces() - xmin_faces);
+    EXPECT_EQ(std::count(grouped.face_entity.begin(), grouped.face_entity.end(), kSide0), 0);
+    EXPECT_EQ(grouped.num_edges(), mesh.num_edges());
+    MshOptions all{41, binary};
+    all.save_all = true;
+    write_msh(mesh, path, all);
+    const FeMesh everything = read_msh(path);
+    EXPECT_EQ(everything.num_faces(), mesh.num_faces());
+    EXPECT_EQ(std::count(everything.face_entity.begin(), everything.face_entity.end(), kSide0),
+              std::ptrdiff_t(xmin_faces));
+  }
+}
+
 TEST(MshFormat, IrrationalCoordinatesRoundTripBitForBit) {
   FeMesh mesh = cube_mesh(2, 1);
   std::mt19937_64 rng(7);
@@ -393,7 +430,7 @@ const int kAbaqusFaceCorners[4][3] = {{0, 1, 2}, {0, 3, 1}, {1, 3, 2}, {2, 3, 0}
 /// with a comma).
 struct InpDeck {
   std::map<long, std::array<double, 3>> nodes;
-  std::string element_type;
+  std::string element_type, node_nset;
   std::map<long, std::vector<long>> elements;
   std::map<std::string, std::vector<long>> elsets, nsets;
   std::map<std::string, std::vector<std::pair<long, int>>> surfaces;
@@ -440,6 +477,7 @@ InpDeck parse_inp(const std::string& path) {
       kw = line;
       block = line.substr(0, line.find(','));
       if (block == "*ELEMENT") deck.element_type = param(line, "TYPE");
+      if (block == "*NODE") deck.node_nset = param(line, "NSET");
       continue;
     }
     if (block == "*HEADING") continue;
@@ -488,6 +526,7 @@ TEST(InpFormat, DeckMatchesMeshForBothOrders) {
     EXPECT_EQ(deck.elsets.at("solid"), all);
     EXPECT_EQ(deck.elsets.at("right_half"), right);
     EXPECT_EQ(deck.elsets.count("EALL"), 0u);  // EALL is the *ELEMENT line's ELSET
+    EXPECT_EQ(deck.node_nset, "NALL");         // and NALL the *NODE line's NSET
 
     // NSETs: the nodes of each group's elements, ascending.
     for (const FeGroup& g : mesh.groups) {
@@ -590,6 +629,10 @@ TEST(FeWriters, InvalidMeshesAreUsageErrorsAndLeaveNoFile) {
   m = cube_mesh(2, 1);
   m.groups.push_back({"SOLID", 2, {kSide0}});  // same Abaqus name as the volume group "solid"
   EXPECT_NE(error_of<UsageError>([&] { write_inp(m, path); }).find("same Abaqus set name"),
+            std::string::npos);
+  m = cube_mesh(2, 1);
+  m.groups.push_back({"nall", 2, {kSide0}});  // the all-nodes NSET of the *NODE line
+  EXPECT_NE(error_of<UsageError>([&] { write_inp(m, path); }).find("all-nodes NSET 'NALL'"),
             std::string::npos);
   m = cube_mesh(2, 1);
   m.points.xyz[4] = std::nan("");
@@ -941,6 +984,16 @@ TEST(RealClients, MeshioReadsMshInpAndMedit) {
           EXPECT_EQ(num(v, "cellset_" + grp.name), members) << grp.name;
         }
       }
+    }
+    {  // an entity in no group: not saved (Gmsh's default), which meshio 5 needs for 4.1
+      SCOPED_TRACE("order " + std::to_string(order) + ", MSH 4.1 with an entity in no group");
+      const FeMesh partial = cube_without_xmin_group(order);
+      const std::string path = scratch(".msh");
+      write_msh(partial, path);
+      const auto v = meshio_view(path, "gmsh");
+      const long xmin = long(std::count(partial.face_entity.begin(), partial.face_entity.end(), kSide0));
+      EXPECT_EQ(num(v, tet), long(partial.num_tets()));
+      EXPECT_EQ(num(v, tri), long(partial.num_faces()) - xmin);
     }
     {
       SCOPED_TRACE("order " + std::to_string(order) + ", INP");
