@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "core/error.h"
 #include "tests/support/scratch.h"
@@ -304,6 +305,56 @@ jobs:
 )");
   EXPECT_EQ(o.line(), 2u);  // the shared value comes from the defaults
   EXPECT_TRUE(contains(o.what(), "also written by job 'a'")) << o.what();
+}
+
+TEST(JobConfig, SolverOutputsAndBoundaryVtu) {
+  const fs::path file = write_batch(R"(jobs:
+  - name: a
+    input: parts/block.stl
+    size: 1
+    element_order: 2
+    msh_version: 2.2
+    output: {msh: a.msh, inp: a.inp, mesh: a.mesh, boundary_vtu: sub/a-boundary.vtu}
+  - name: b
+    input: parts/block.stl
+    size: 1
+    output: {boundary_vtu: /abs/b-boundary.vtu}
+)");
+  const BatchConfig c = kdmesh::load_batch_config(file.string(), "results");
+  ASSERT_EQ(c.jobs.size(), 2u);
+  EXPECT_EQ(c.jobs[0].msh, "results/a.msh");
+  EXPECT_EQ(c.jobs[0].inp, "results/a.inp");
+  EXPECT_EQ(c.jobs[0].medit, "results/a.mesh");
+  EXPECT_EQ(c.jobs[0].boundary_vtu, "results/sub/a-boundary.vtu");  // relative to out_dir
+  EXPECT_EQ(c.jobs[0].element_order, 2);
+  EXPECT_EQ(c.jobs[0].msh_version, 22);
+  EXPECT_EQ(c.jobs[1].boundary_vtu, "/abs/b-boundary.vtu");          // absolute paths stay
+  EXPECT_TRUE(c.jobs[1].msh.empty() && c.jobs[1].inp.empty() && c.jobs[1].medit.empty());
+  EXPECT_EQ(kdmesh::output_paths(c.jobs[0]),
+            (std::vector<std::string>{"results/a.msh", "results/a.inp", "results/a.mesh",
+                                      "results/sub/a-boundary.vtu"}));
+
+  const InputError empty = load_error("jobs:\n  - {name: a, input: parts/block.stl, size: 1,\n"
+                                      "     output: {boundary_vtu: ''}}\n");
+  EXPECT_EQ(empty.line(), 3u);
+  EXPECT_TRUE(contains(empty.what(), "key 'output': key 'boundary_vtu': expected a non-empty string"))
+      << empty.what();
+  const InputError typo = load_error("jobs:\n  - {name: a, input: parts/block.stl, size: 1,\n"
+                                     "     output: {boundary-vtu: b.vtu}}\n");
+  EXPECT_EQ(typo.line(), 3u);
+  EXPECT_TRUE(contains(typo.what(), "did you mean 'boundary_vtu'")) << typo.what();
+
+  // One file for two outputs: of one job (the volume and the boundary VTU), or of two jobs.
+  const InputError same = load_error("jobs:\n  - {name: a, input: parts/block.stl, size: 1,\n"
+                                     "     output: {vtu: a.vtu, boundary_vtu: a.vtu}}\n");
+  EXPECT_EQ(same.line(), 3u);
+  EXPECT_TRUE(contains(same.what(), "'a.vtu' (boundary_vtu) is also written by this job (vtu)")) << same.what();
+  const InputError shared = load_error(R"(jobs:
+  - {name: a, input: parts/block.stl, size: 1, output: {msh: m.msh}}
+  - {name: b, input: parts/block.stl, size: 1, output: {boundary_vtu: m.msh}}
+)");
+  EXPECT_EQ(shared.line(), 3u);
+  EXPECT_TRUE(contains(shared.what(), "(boundary_vtu) is also written by job 'a' (msh)")) << shared.what();
 }
 
 TEST(JobConfig, MissingInputIsResolvedAgainstTheBatchDirectory) {

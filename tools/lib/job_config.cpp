@@ -59,7 +59,7 @@ const std::vector<std::string> kJobKeys = {"name",        "input", "scale", "siz
                                            "patch_groups", "element_order", "msh_version", "improve", "output"};
 const std::vector<std::string> kZoneTypes = {"sharp_edges", "polyline", "segment", "plane",
                                              "point",       "box",      "ball"};
-const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes", "msh", "inp", "mesh"};
+const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes", "msh", "inp", "mesh", "boundary_vtu"};
 const std::vector<std::string> kGroupKeys = {"name", "dim", "zone", "point", "box"};
 const std::vector<std::string> kChecks = {"tetgen", "delaunay"};
 
@@ -426,6 +426,8 @@ class Loader {
       if (o.count("msh")) job.msh = resolve_output(o.at("msh").value, k + ": key 'msh'");
       if (o.count("inp")) job.inp = resolve_output(o.at("inp").value, k + ": key 'inp'");
       if (o.count("mesh")) job.medit = resolve_output(o.at("mesh").value, k + ": key 'mesh'");
+      if (o.count("boundary_vtu"))
+        job.boundary_vtu = resolve_output(o.at("boundary_vtu").value, k + ": key 'boundary_vtu'");
     }
     return job;
   }
@@ -452,7 +454,11 @@ class Loader {
                "job '" + j.name + "': key 'name': duplicate job name (first defined at " + other.origin + ")");
       for (const auto& [k, path] : {std::pair<const char*, const std::string*>{"vtu", &j.vtu},
                                     {"summary", &j.summary},
-                                    {"nodes", &j.nodes}}) {
+                                    {"nodes", &j.nodes},
+                                    {"msh", &j.msh},
+                                    {"inp", &j.inp},
+                                    {"mesh", &j.medit},
+                                    {"boundary_vtu", &j.boundary_vtu}}) {
         if (path->empty()) continue;
         std::error_code ec;
         fs::path canon_path = fs::weakly_canonical(*path, ec);
@@ -463,8 +469,9 @@ class Loader {
           fail(jobs[i]["output"] ? jobs[i]["output"]
                : defaults.count("output") ? defaults.at("output").value
                                           : jobs[i],
-               "job '" + j.name + "': key 'output': '" + *path + "' (" + k + ") is also written by job '" +
-                   it->second.first + "' (" + it->second.second + ")");
+               "job '" + j.name + "': key 'output': '" + *path + "' (" + k + ") is also written by " +
+                   (it->second.first == j.name ? "this job" : "job '" + it->second.first + "'") + " (" +
+                   it->second.second + ")");
         writers[canon] = {j.name, k};
       }
       config.jobs.push_back(std::move(j));

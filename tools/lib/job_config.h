@@ -44,11 +44,14 @@ namespace kdmesh {
 ///     improve      optional bool: quality improvement after meshing (default true)
 ///     element_order optional 1 or 2 (C3D10 / tet10 with mid-edge nodes on the surface)
 ///     msh_version  optional 4.1 (default) or 2.2
-///     output       optional mapping {vtu, summary, nodes, msh, inp, mesh}: paths relative to out_dir
+///     output       optional mapping {vtu, summary, nodes, msh, inp, mesh, boundary_vtu}: paths
+///                  relative to out_dir; no two outputs (of any jobs) may be one file. mesh is
+///                  MEDIT; boundary_vtu the boundary faces and feature edges with their patch /
+///                  curve ids and one 0/1 cell array per group (io/boundary_vtu_writer.h)
 ///
 /// Every error is an InputError naming the file, the 1-based line and the key at fault:
 /// unknown keys (with the closest valid key), wrong types, missing required keys, bad values,
-/// duplicate keys or job names, missing inputs, two jobs writing one file, YAML syntax errors.
+/// duplicate keys or job names, missing inputs, two outputs writing one file, YAML syntax errors.
 struct BatchConfig {
   std::string file;           ///< the YAML file as given
   std::vector<MeshJob> jobs;  ///< in file order; MeshJob::origin is "file:line" of the job

@@ -2,6 +2,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "tools/lib/mesh_job.h"
 
+#include <algorithm>
 #include <array>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,7 @@
 
 #include "core/atomic_file.h"
 #include "core/timer.h"
+#include "io/boundary_vtu_writer.h"
 #include "io/inp_writer.h"
 #include "io/medit_writer.h"
 #include "io/msh_writer.h"
@@ -168,6 +170,24 @@ nlohmann::json size_fidelity_json(const SizeFidelity& f) {
           {"long_fraction", f.long_fraction},
           {"min_ratio", f.min_ratio},
           {"max_ratio", f.max_ratio}};
+}
+
+/// The summary's groups: name, dim, how many entities each lists and how many elements of its
+/// dimension (tets, boundary faces, feature-edge segments) those entities have.
+nlohmann::json groups_json(const FeMesh& fe) {
+  nlohmann::json groups = nlohmann::json::array();
+  for (const FeGroup& g : fe.groups) {
+    std::vector<std::uint32_t> ids = g.entities;
+    std::sort(ids.begin(), ids.end());
+    const std::vector<std::uint32_t>& of =
+        g.dim == 3 ? fe.tet_entity : g.dim == 2 ? fe.face_entity : fe.edge_entity;
+    const std::size_t elements = std::size_t(std::count_if(of.begin(), of.end(), [&](std::uint32_t e) {
+      return std::binary_search(ids.begin(), ids.end(), e);
+    }));
+    groups.push_back(
+        {{"name", g.name}, {"dim", g.dim}, {"entities", g.entities.size()}, {"elements", elements}});
+  }
+  return groups;
 }
 
 /// The Delaunay tetrahedralization of the final nodes, verified as `kdmesh delaunay --check`
@@ -397,7 +417,8 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
 
   // Solver formats: boundary patches and feature curves, named groups, optional quadratic nodes.
   FeMesh fe;
-  const bool solver_formats = !job.msh.empty() || !job.inp.empty() || !job.medit.empty();
+  const bool solver_formats =
+      !job.msh.empty() || !job.inp.empty() || !job.medit.empty() || !job.boundary_vtu.empty();
   if (solver_formats) {
     clock.reset();
     log("boundary groups");
@@ -419,9 +440,7 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
     }
     fe = make_fe_mesh(mesh, bg, make_groups(job.groups, surface.mesh, patches, job.sizing.zones,
                                             surface.num_bodies, job.group_options));
-    nlohmann::json groups = nlohmann::json::array();
-    for (const FeGroup& g : fe.groups) groups.push_back({{"name", g.name}, {"dim", g.dim}, {"entities", g.entities.size()}});
-    j["groups"] = groups;
+    j["groups"] = groups_json(fe);
     if (job.element_order == 2) {
       log("quadratic elements");
       const QuadraticStats qs = make_quadratic(fe, surface.mesh, query, patches);
@@ -467,6 +486,10 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
     log("writing " + job.medit);
     write_medit(fe, open(job.medit, "medit"));
   }
+  if (!job.boundary_vtu.empty()) {
+    log("writing " + job.boundary_vtu);
+    write_boundary_vtu(fe, open(job.boundary_vtu, "boundary_vtu"));
+  }
   std::string summary_tmp;
   if (!job.summary.empty()) summary_tmp = open(job.summary, "summary");
   j["outputs"] = outputs;
@@ -484,7 +507,7 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
 
 std::vector<std::string> output_paths(const MeshJob& job) {
   std::vector<std::string> paths;
-  for (const std::string* p : {&job.vtu, &job.summary, &job.nodes, &job.msh, &job.inp, &job.medit})
+  for (const std::string* p : {&job.vtu, &job.summary, &job.nodes, &job.msh, &job.inp, &job.medit, &job.boundary_vtu})
     if (!p->empty()) paths.push_back(*p);
   return paths;
 }

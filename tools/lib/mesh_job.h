@@ -35,8 +35,10 @@ struct MeshJob {
   SurfaceRepairOptions repair; ///< opt-in safe surface repairs, reported as notices
   bool improve = true;         ///< quality improvement after meshing (mesher/mesh_improve.h)
   std::string vtu, summary, nodes;  ///< output paths (usable as is); empty = not written
-  /// Solver formats (usable as is; empty = not written): Gmsh MSH, Abaqus/CalculiX INP, MEDIT.
-  std::string msh, inp, medit;
+  /// Solver formats (usable as is; empty = not written): Gmsh MSH, Abaqus/CalculiX INP, MEDIT,
+  /// and the boundary VTU (faces and feature edges with patch / curve ids and one 0/1 array per
+  /// boundary group, io/boundary_vtu_writer.h). Any of them turns on the boundary groups stage.
+  std::string msh, inp, medit, boundary_vtu;
   int msh_version = 41;        ///< 41 or 22
   int element_order = 1;       ///< 1 (C3D4 / tet4) or 2 (C3D10 / tet10) in the solver formats
   std::vector<GroupSpec> groups;  ///< named boundary groups (mesher/boundary_groups.h)
@@ -63,7 +65,9 @@ struct MeshJobResult {
   ///           steiner_points, dropped_nodes, steiner_rounds, tets, boundary_faces},
   ///   estimate {nodes, surface_nodes, interior_nodes, peak_bytes, capped, limit_bytes},
   ///   repairs {...} (when asked), improve {edge_removals, face_removals, relaxed, smoothed,
-  ///   boundary_changes} (when on), boundary, groups, quadratic (with solver outputs),
+  ///   boundary_changes} (when on), boundary, groups [{name, dim, entities (how many entities
+  ///   it lists), elements (tets / boundary faces / feature-edge segments of those entities)}],
+  ///   quadratic (order 2) (these three with solver outputs),
   ///   seconds {read, prepare, features, sizing, query, estimate, place, mesh, improve,
   ///            delaunay_check, mesh_check, quality, groups, write, total,
   ///            mesh_stages {order, delaunay (all rounds), first_delaunay, classify, recover}},
@@ -71,7 +75,8 @@ struct MeshJobResult {
   ///   quality {tets, inverted, min_dihedral, max_dihedral (degrees), mean_radius_ratio,
   ///            min_radius_ratio, max_radius_edge, min_dihedral_hist, radius_ratio_hist},
   ///   mesh_check {... every MeshCheck figure ..., pass, failures},
-  ///   delaunay_check (when asked), notices [...], outputs {vtu, summary, nodes},
+  ///   delaunay_check (when asked), notices [...], outputs {vtu, nodes, msh, inp, medit,
+  ///   boundary_vtu, summary} (the files written, by kind),
   ///   error {type, exit_code, message} (failed jobs only).
   /// Keys of stages a failed job never reached are absent.
   nlohmann::json summary;
