@@ -414,14 +414,22 @@ BoundaryGroups assign_boundary(const VolumeMesh& mesh, const SurfaceMesh& surfac
     }
     const std::uint32_t* t = surface.tri(f);
     NodeLoc l{NodeLoc::patch, patches.facet_patch[f]};
+    // The nearest vertex within tol, else the nearest edge within tol: not the first one. In
+    // a sliver facet a node on one edge (e.g. a crease Steiner point next to a polyline vertex
+    // that edge sampling skipped) can be within tol of another edge too (the gear box: a
+    // feature edge and a fan diagonal 6 degrees apart); it lies on the one it is nearest to.
     int at_vertex = -1, on_edge = -1;
-    for (int k = 0; k < 3 && at_vertex < 0; ++k)
-      if (dist(x, surface.points.p(t[k])) <= tol) at_vertex = k;
-    double te = 0;
+    double best = tol;
+    for (int k = 0; k < 3; ++k) {
+      const double d = dist(x, surface.points.p(t[k]));
+      if (d <= best) best = d, at_vertex = k;
+    }
+    best = tol;
     if (at_vertex < 0)
-      for (int k = 0; k < 3 && on_edge < 0; ++k)
-        if (segment_dist(x, surface.points.p(t[k]), surface.points.p(t[(k + 1) % 3]), &te) <= tol)
-          on_edge = k;
+      for (int k = 0; k < 3; ++k) {
+        const double d = segment_dist(x, surface.points.p(t[k]), surface.points.p(t[(k + 1) % 3]));
+        if (d <= best) best = d, on_edge = k;
+      }
     if (at_vertex >= 0) {
       const auto [b, e] = curves_at(t[at_vertex]);
       if (b != e) {

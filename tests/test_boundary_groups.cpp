@@ -364,6 +364,140 @@ TEST(AssignBoundary, GeometricAndAmbiguousDecisions) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Regression (gear box, size 3): edge sampling skipped a vertex V of a faceted circle (no
+// corner there) and boundary recovery put a crease Steiner point S on the feature edge next to
+// V, 1e-7 from it. S's facet was a sliver of the fanned face: its diagonal from V runs at
+// pi/N to the feature edge, so S is within the location tolerance (1e-9 of the facet's longest
+// edge) of the diagonal too. Taking the first edge within tolerance put S inside the face's
+// patch: the curve was reported missing between the sampled nodes, the edges through S as
+// stray, and the side faces at S as uncertain. The surface: a 64-gon prism of radius 40 whose
+// top cap is fanned from rim vertex t0 (slivers at t0), bottom cap fanned from its centre.
+// The boundary: the top ring t1 .. t(N-1), S' (1e-7 from t0 towards t(N-1)), S (1e-7 from t0
+// towards t1) - t0 itself skipped, one of S, S' meets the diagonal first in its facet whatever
+// the winding -, the bottom ring b0 .. b(N-1), the caps fanned from their centres.
+TEST(AssignBoundary, SteinerNodeOnFeatureCurveJoinsTheCurve) {
+  const int N = 64;
+  const double R = 40, H = 10, delta = 1e-7;
+  SurfaceMesh raw;
+  for (int z = 0; z < 2; ++z)
+    for (int k = 0; k < N; ++k)
+      raw.points.push_back(R * std::cos(2 * kPi * k / N), R * std::sin(2 * kPi * k / N), z * H);
+  raw.points.push_back(0, 0, 0);
+  const std::uint32_t c0 = 2 * N;
+  auto T = [&](int k) { return std::uint32_t(N + (k % N)); };
+  for (std::uint32_t k = 0; k < std::uint32_t(N); ++k) {
+    const std::uint32_t b = k, b1 = (k + 1) % N;
+    raw.tris.insert(raw.tris.end(), {b, b1, T(k + 1), b, T(k + 1), T(k), c0, b1, b});
+  }
+  for (int k = 1; k + 1 < N; ++k) raw.tris.insert(raw.tris.end(), {T(0), T(k), T(k + 1)});  // +z
+  const PreparedSurface s = prepare_surface(raw, "fanned prism");
+  const SurfaceQuery q(s.mesh);
+  const SurfacePatches p = segment_surface(s.mesh, detect_sharp_edges(s.mesh, 30));
+  ASSERT_EQ(p.num_patches, 3u);
+  ASSERT_EQ(p.num_curves(), 2u);  // the rims, closed; t0 is no corner (5.625 degree bend)
+  // Raw point i in the prepared surface (found by its coordinates); facet with corners a, b, c.
+  auto pid = [&](std::uint32_t i) {
+    for (std::uint32_t j = 0; j < s.mesh.points.size(); ++j)
+      if (dist(s.mesh.points.p(j), raw.points.p(i)) == 0) return j;
+    ADD_FAILURE() << "point " << i << " lost";
+    return 0u;
+  };
+  auto facet_of = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+    const std::set<std::uint32_t> want{pid(a), pid(b), pid(c)};
+    for (std::uint32_t f = 0; f < s.mesh.num_tris(); ++f)
+      if (std::set<std::uint32_t>(s.mesh.tri(f), s.mesh.tri(f) + 3) == want) return f;
+    ADD_FAILURE() << "no facet " << a << " " << b << " " << c;
+    return kNoFacet;
+  };
+  const double* t0 = raw.points.p(T(0));
+  auto toward = [&](std::uint32_t v, double* out) {
+    const double* x = raw.points.p(v);
+    const double l = dist(t0, x);
+    for (int k = 0; k < 3; ++k) out[k] = t0[k] + delta / l * (x[k] - t0[k]);
+  };
+  double S[3], S2[3];
+  toward(T(1), S);
+  toward(T(N - 1), S2);
+  {  // The fixture's premise: S is 1e-7 from t0 yet within 1e-9 * (longest edge) of the diagonal.
+    const double* t2 = raw.points.p(T(2));
+    const double longest = dist(t0, t2);  // of facet (t0, t1, t2)
+    const double u[3] = {t2[0] - t0[0], t2[1] - t0[1], t2[2] - t0[2]};
+    const double w[3] = {S[0] - t0[0], S[1] - t0[1], S[2] - t0[2]};
+    const double cr = std::hypot(u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]);
+    EXPECT_LT(cr / longest, 1e-9 * longest);
+    EXPECT_GT(dist(S, t0), 2e-9 * longest);
+  }
+  auto build = [&](const double* s_pos) {
+    VolumeMesh vm;
+    // Nodes: top ring 0 .. N-2 = t1 .. t(N-1), N-1 = S', N = S; bottom ring N+1+k = bk; then
+    // the top centre 2N+1 and the bottom centre 2N+2. Only S and S' are given their facet (the
+    // slivers at t0); the others are located by the surface query.
+    for (int k = 1; k < N; ++k) vm.nodes.push_back(raw.points.p(T(k)), NodeKind::edge, kNoFacet, 1.f);
+    vm.nodes.push_back(S2, NodeKind::edge, facet_of(T(0), T(N - 2), T(N - 1)), 1.f);
+    vm.nodes.push_back(s_pos, NodeKind::edge, facet_of(T(0), T(1), T(2)), 1.f);
+    for (int k = 0; k < N; ++k) vm.nodes.push_back(raw.points.p(k), NodeKind::edge, kNoFacet, 1.f);
+    const double ct[3] = {0, 0, H}, cb[3] = {0, 0, 0};
+    vm.nodes.push_back(ct, NodeKind::surface, kNoFacet, 1.f);
+    vm.nodes.push_back(cb, NodeKind::corner, kNoFacet, 1.f);
+    const std::uint32_t n = N + 1, Ct = 2 * N + 1, Cb = 2 * N + 2;
+    auto b = [&](int k) { return std::uint32_t(N + 1 + (k % N)); };
+    for (std::uint32_t i = 0; i < n; ++i) vm.boundary.insert(vm.boundary.end(), {Ct, i, (i + 1) % n});
+    for (int k = 0; k < N; ++k) vm.boundary.insert(vm.boundary.end(), {Cb, b(k + 1), b(k)});
+    for (int k = 1; k + 1 < N; ++k)  // quads (tk, tk+1) over (bk, bk+1); node of tk is k-1
+      vm.boundary.insert(vm.boundary.end(), {b(k), b(k + 1), std::uint32_t(k), b(k), std::uint32_t(k), std::uint32_t(k - 1)});
+    vm.boundary.insert(vm.boundary.end(), {b(N - 1), b(0), N - 1, b(N - 1), N - 1, N - 2,  // t(N-1) S'
+                                           b(0), N, N - 1,                                  // S' S
+                                           b(0), b(1), 0, b(0), 0, N});                     // S t1
+    return vm;
+  };
+  std::uint32_t top = kNoEntity, bottom = kNoEntity, side = kNoEntity;
+  for (std::size_t f = 0; f < s.mesh.num_tris(); ++f) {
+    const auto nf = facet_normal(s.mesh, f);
+    (nf[2] > 0.5 ? top : nf[2] < -0.5 ? bottom : side) = p.facet_patch[f];
+  }
+  const VolumeMesh vm = build(S);
+  const BoundaryGroups g = assign_boundary(vm, s.mesh, p, q);
+  EXPECT_TRUE(g.ok()) << problems(g);
+  const std::size_t nb = vm.boundary.size() / 3;
+  ASSERT_EQ(g.face_patch.size(), nb);
+  const PointSet& P = vm.nodes.points;
+  for (std::size_t f = 0; f < nb; ++f) {  // all nodes at z = H: top; at z = 0: bottom; else side
+    int at_top = 0, at_bottom = 0;
+    for (int k = 0; k < 3; ++k) {
+      at_top += P.p(vm.boundary[3 * f + k])[2] == H;
+      at_bottom += P.p(vm.boundary[3 * f + k])[2] == 0;
+    }
+    EXPECT_EQ(g.face_patch[f], at_top == 3 ? top : at_bottom == 3 ? bottom : side) << "face " << f;
+  }
+  // The top rim's mesh edges are the N + 1 edges of the top ring, through S' and S; the
+  // bottom rim's the N edges of the bottom ring.
+  std::set<std::pair<std::uint32_t, std::uint32_t>> top_edges, want;
+  std::size_t bottom_edges = 0;
+  for (std::size_t e = 0; e < g.edge_curve.size(); ++e) {
+    const double z = P.p(g.edges[2 * e])[2];
+    EXPECT_EQ(P.p(g.edges[2 * e + 1])[2], z);
+    if (z == H) top_edges.insert(std::minmax(g.edges[2 * e], g.edges[2 * e + 1]));
+    else ++bottom_edges;
+  }
+  for (std::uint32_t i = 0; i < N + 1; ++i) want.insert(std::minmax(i, (i + 1) % (N + 1)));
+  EXPECT_EQ(top_edges, want);
+  EXPECT_EQ(bottom_edges, std::size_t(N));
+
+  // Still strict: S moved 1e-6 into the cap (off the rim, far beyond the tolerance) leaves the
+  // top rim's nodes S' and t1 consecutive and not joined by a boundary edge.
+  double off[3] = {S[0] - 1e-6 * t0[0] / R, S[1] - 1e-6 * t0[1] / R, S[2]};
+  const BoundaryGroups h = assign_boundary(build(off), s.mesh, p, q);
+  EXPECT_FALSE(h.ok());
+  EXPECT_EQ(h.missing_curve_edges, 1u) << problems(h);
+  EXPECT_GT(h.stray_patch_edges, 0u) << problems(h);
+  bool named = false;
+  for (const std::string& line : h.problems)
+    named |= line.find("consecutive nodes " + std::to_string(N - 1)) != std::string::npos &&
+             line.find(" and 0 (") != std::string::npos;
+  EXPECT_TRUE(named) << problems(h);
+}
+
+// ---------------------------------------------------------------------------------------------
 // Named groups on the unit cube, each checked against what the geometry says.
 class CubeGroups : public ::testing::Test {
  protected:
