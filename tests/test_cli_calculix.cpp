@@ -13,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <iostream>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -308,6 +309,8 @@ TEST(CalculixBlock, ConstrainedEdgesClampedTopLoadedC3D10Converges) {
   const Vec u4 = solve_block(dir, "e20", "fixed_edges", corner);
   const Vec u20 = solve_block(dir, "e20q", "fixed_edges", corner);
   const Vec u10 = solve_block(dir, "e10q", "fixed_edges", corner);
+  std::cout << "corner (0, 0, 100) u_z [mm]: C3D4 h=20 " << u4[2] << ", C3D10 h=20 " << u20[2]
+            << ", C3D10 h=10 " << u10[2] << "\n";
   EXPECT_LT(u20[2], 0);
   EXPECT_LT(u10[2], 0);
   EXPECT_LT(std::abs(u20[2] - u10[2]), 0.02 * std::abs(u10[2])) << u20[2] << " vs " << u10[2];
@@ -345,6 +348,8 @@ TEST(CalculixBlock, FaceClampedTopLoadedC3D10ConvergesAndC3D4Approaches) {
   double last_gap = INFINITY;
   for (const int h : {20, 10, 5}) {
     const double l = norm(solve_block(dir, face_job(h, 1), "clamped", corner));
+    std::cout << "corner (100, 100, 100) |u| [mm]: C3D4 h=" << h << " " << l << " (C3D10 h=20 " << q20
+              << ", h=10 " << q10 << ")\n";
     const double gap = q10 - l;
     EXPECT_GT(gap, 0) << "C3D4 at h = " << h << " moves more than C3D10";
     EXPECT_LT(gap, last_gap) << "C3D4 at h = " << h << " is not closer to C3D10";
@@ -394,6 +399,8 @@ TEST(CalculixGearbox, ShippedMeshUnderGravityIsInEquilibrium) {
     const Vec rf = s.reactions.at(upper(support));
     SCOPED_TRACE(std::string(body) + " on " + support);
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(rf[k], -free_load[k], 1e-6 * std::abs(rho_g[2]) * v);
+    std::cout << body << " on " << support << ": volume " << v << " mm^3, reaction z " << rf[2]
+              << " N, load at the free nodes " << -free_load[2] << " N\n";
     EXPECT_GT(rf[2], 0);
     // Most of the weight is carried: the support's own nodes hold a thin layer only.
     EXPECT_GT(rf[2], 0.9 * -rho_g[2] * v);
@@ -402,6 +409,7 @@ TEST(CalculixGearbox, ShippedMeshUnderGravityIsInEquilibrium) {
   // Self-weight of steel parts this size: a sag of the order of rho g L^2 / E ~ 1e-5 mm.
   double max_u = 0;
   for (const auto& [n, u] : s.u) max_u = std::max(max_u, norm(u));
+  std::cout << "largest displacement " << max_u << " mm\n";
   EXPECT_GT(max_u, 0);
   EXPECT_LT(max_u, 1e-2);
 }
