@@ -35,5 +35,6 @@ void add_delaunay_command(CLI::App& app, Runner& run);
 void add_bench_command(CLI::App& app, Runner& run);
 void add_mesh_command(CLI::App& app, Runner& run);
 void add_batch_command(CLI::App& app, Runner& run);
+void add_compare_tetgen_command(CLI::App& app, Runner& run);
 
 }  // namespace kdmesh::cli

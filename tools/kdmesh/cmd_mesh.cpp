@@ -1,18 +1,14 @@
 // kdmesh mesh — tetrahedral mesh of a closed surface (STL/PLY): the whole pipeline, checked.
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include <filesystem>
 #include <iostream>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
-#include <vector>
 
 #include "core/error.h"
-#include "mesher/order.h"
-#include "core/memory_amount.h"
-#include "mesher/surface_repair.h"
 #include "tools/kdmesh/cli.h"
+#include "tools/kdmesh/mesh_options.h"
 #include "tools/lib/mesh_job.h"
 
 namespace kdmesh::cli {
@@ -20,74 +16,13 @@ namespace kdmesh::cli {
 namespace {
 
 struct Options {
-  std::string input;
-  double size = 0;
-  double refine_edges = 0;  ///< 0: no sharp_edges zone
-  double edge_size = 0;     ///< 0: size / 4
-  double min_size = 0;      ///< 0: size / 1000
-  double gradation = 0.3;
-  double sharp_angle = 30;
-  double scale = 1;
-  std::string order = "kd-bfs";
-  std::uint64_t seed = 1;
-  std::vector<std::string> checks;
-  std::string max_memory;   ///< empty: the machine's memory
-  std::string repair;       ///< comma-separated opt-in repairs
-  std::string output, summary, nodes;
-  std::string msh, inp, medit;
-  int element_order = 1;
-  std::string msh_version = "4.1";
-  bool patch_groups = false;
-  bool no_improve = false;
+  MeshCliOptions mesh;
   Output out;
 };
 
-MeshJob make_job(const Options& o) {
-  MeshJob job;
-  job.name = std::filesystem::path(o.input).stem().string();
-  job.input = o.input;
-  job.scale = o.scale;
-  job.sharp_angle = o.sharp_angle;
-  job.sizing.max_size = o.size;
-  job.sizing.min_size = o.min_size > 0 ? o.min_size : o.size / 1000;
-  if (job.sizing.min_size > job.sizing.max_size)
-    throw UsageError("--min-size " + std::to_string(o.min_size) + " exceeds --size " + std::to_string(o.size));
-  job.sizing.gradation = o.gradation;
-  if (o.edge_size > 0 && o.refine_edges <= 0)
-    throw UsageError("--edge-size needs --refine-edges ANGLE");
-  if (o.refine_edges > 0) {
-    SizingZone z;
-    z.kind = SizingZone::Kind::sharp_edges;
-    z.name = "sharp_edges";
-    z.size = o.edge_size > 0 ? o.edge_size : o.size / 4;
-    z.angle_deg = o.refine_edges;
-    job.sizing.zones.push_back(z);
-  }
-  job.order.kind = parse_order_kind(o.order);
-  job.seed = o.seed;
-  job.order.seed = o.seed;
-  for (const std::string& c : o.checks) {
-    if (c == "tetgen") job.check_tetgen = true;
-    if (c == "delaunay") job.check_delaunay = true;
-  }
-  if (!o.max_memory.empty()) job.max_memory = parse_memory_amount(o.max_memory, "--max-memory");
-  job.repair = parse_surface_repairs(o.repair, "--repair");
-  job.improve = !o.no_improve;
-  job.msh = o.msh;
-  job.inp = o.inp;
-  job.medit = o.medit;
-  job.element_order = o.element_order;
-  job.msh_version = o.msh_version == "2.2" ? 22 : 41;
-  job.group_options.patch_groups = job.group_options.curve_groups = o.patch_groups;
-  job.vtu = o.output;
-  job.summary = o.summary;
-  job.nodes = o.nodes;
-  return job;
-}
-
 int run_mesh(const Options& o) {
   const Output& out = o.out;
-  const MeshJob job = make_job(o);
+  const MeshJob job = make_mesh_job(o.mesh);
   MeshJobCallbacks cb;
   cb.log = [&out](const std::string& s) { out.stage(s); };
   // One progress line per stage (rewritten in place on a terminal; silent otherwise).
@@ -115,62 +50,7 @@ void add_mesh_command(CLI::App& app, Runner& run) {
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
       "mesh", "Tetrahedral mesh of a closed surface (.stl, .ply), checked as an FE domain");
-  cmd->add_option("input", o->input, "Closed surface (.stl or .ply)")->required();
-  cmd->add_option("--size", o->size, "Target edge length far from every zone (h_max)")
-      ->required()
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--refine-edges", o->refine_edges,
-                  "Refine along surface edges sharper than ANGLE degrees (a sharp_edges zone)")
-      ->check(CLI::Range(0.0, 180.0).description("in (0, 180)") & CLI::PositiveNumber);
-  cmd->add_option("--edge-size", o->edge_size, "Size on the --refine-edges zone (default size/4)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--min-size", o->min_size, "Floor of the target size (default size/1000)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--gradation", o->gradation, "Size growth per unit distance from a zone")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  cmd->add_option("--sharp-angle", o->sharp_angle,
-                  "Feature edges kept in the mesh: dihedral deviation >= this (degrees; 0 = none)")
-      ->check(CLI::Range(0.0, 179.999))
-      ->capture_default_str();
-  cmd->add_option("--scale", o->scale, "Multiply the coordinates by this")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  cmd->add_option("--order", o->order, "Insertion order of the nodes")
-      ->check(CLI::IsMember(order_kind_names()))
-      ->capture_default_str();
-  cmd->add_option("--seed", o->seed, "Seed of node placement and the random orders")->capture_default_str();
-  cmd->add_option("--check", o->checks,
-                  "Also verify the nodes' Delaunay tetrahedralization: tetgen (exact validity + "
-                  "TetGen 1.5 + CGAL 5.5) and/or delaunay (exact validity); repeatable")
-      ->check(CLI::IsMember({"tetgen", "delaunay"}))
-      ->expected(1)
-      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
-      ->delimiter(',');
-  cmd->add_option("--max-memory", o->max_memory,
-                  "Refuse the job (exit 7) if its estimated peak memory exceeds this, e.g. 8G, "
-                  "512M, none (default: the machine's memory)");
-  cmd->add_option("--repair", o->repair,
-                  "Opt-in safe surface repairs, comma-separated: degenerate (zero-area facets), "
-                  "duplicates (same-orientation copies), orientation (flip facets against their "
-                  "shell), all; each change is reported");
-  cmd->add_option("-o,--output", o->output, "Output mesh (.vtu)");
-  cmd->add_option("--summary", o->summary, "Output summary (.json)");
-  cmd->add_option("--nodes", o->nodes, "Output nodes (.xyz)");
-  cmd->add_option("--msh", o->msh, "Output Gmsh mesh (.msh) with physical groups");
-  cmd->add_option("--inp", o->inp, "Output Abaqus/CalculiX input (.inp) with ELSET/NSET/SURFACE groups");
-  cmd->add_option("--medit", o->medit, "Output MEDIT mesh (.mesh) with references");
-  cmd->add_option("--element-order", o->element_order,
-                  "1: linear tets; 2: quadratic (C3D10), mid-edge nodes on the surface")
-      ->check(CLI::IsMember({1, 2}))
-      ->capture_default_str();
-  cmd->add_option("--msh-version", o->msh_version, "MSH format version")
-      ->check(CLI::IsMember({"4.1", "2.2"}))
-      ->capture_default_str();
-  cmd->add_flag("--no-improve", o->no_improve,
-                "Skip the quality improvement (flips and smoothing): keep the Delaunay tets");
-  cmd->add_flag("--patch-groups", o->patch_groups,
-                "Name every surface patch and feature curve as a group (patch_<i>, curve_<i>)");
+  add_mesh_job_options(cmd, o->mesh);
   add_output_flags(cmd, o->out);
   cmd->callback([o, &run] { run = [o] { return run_mesh(*o); }; });
 }

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   kdmesh::cli::add_delaunay_command(app, run);
   kdmesh::cli::add_mesh_command(app, run);
   kdmesh::cli::add_batch_command(app, run);
+  kdmesh::cli::add_compare_tetgen_command(app, run);
   kdmesh::cli::add_bench_command(app, run);
   try {
     app.parse(argc, argv);

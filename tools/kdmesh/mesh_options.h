@@ -1,0 +1,57 @@
+// kdmesh CLI — the options of one meshing job, shared by `kdmesh mesh` and `kdmesh compare-tetgen`.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "tools/lib/mesh_job.h"
+
+namespace kdmesh::cli {
+
+/// What the command line says about one job: the surface, its sizing, the pipeline switches
+/// and (for `kdmesh mesh`) its outputs. Defaults are those of `kdmesh mesh --help`.
+struct MeshCliOptions {
+  std::string input;
+  double size = 0;
+  double refine_edges = 0;  ///< 0: no sharp_edges zone
+  double edge_size = 0;     ///< 0: size / 4
+  double min_size = 0;      ///< 0: size / 1000
+  double gradation = 0.3;
+  double sharp_angle = 30;
+  double scale = 1;
+  std::string order = "kd-bfs";
+  std::uint64_t seed = 1;
+  std::vector<std::string> checks;
+  std::string max_memory;   ///< empty: the machine's memory
+  std::string repair;       ///< comma-separated opt-in repairs
+  std::string output, summary, nodes;
+  std::string msh, inp, medit, boundary_vtu;
+  int element_order = 1;
+  std::string msh_version = "4.1";
+  bool patch_groups = false;
+  bool no_improve = false;
+};
+
+/// Which of the options a subcommand offers.
+struct MeshCliSpec {
+  /// `input` and `--size` are required (kdmesh mesh). When false they are optional and the
+  /// subcommand checks them itself (e.g. compare-tetgen, where --config replaces them).
+  bool input_required = true;
+  /// The output options (-o, --summary, --nodes, --msh, --inp, --medit, --boundary-vtu,
+  /// --element-order, --msh-version, --patch-groups).
+  bool outputs = true;
+};
+
+/// Registers the job's options on `cmd` (names, help texts, checks and defaults of
+/// `kdmesh mesh`), storing into `o`, which must outlive the parse.
+void add_mesh_job_options(CLI::App* cmd, MeshCliOptions& o, const MeshCliSpec& spec = {});
+
+/// The MeshJob the options describe (name: the input's stem). Throws UsageError for
+/// inconsistent values (--min-size above --size, --edge-size without --refine-edges, a bad
+/// --max-memory or --repair).
+MeshJob make_mesh_job(const MeshCliOptions& o);
+
+}  // namespace kdmesh::cli
