@@ -3,6 +3,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "core/ordering.h"
@@ -41,6 +42,10 @@ struct CgalOptions {
 /// fewer than 4 points, non-finite coordinates, all points coplanar, or a set flatter than
 /// TetGen's internal tolerance (relative thickness below ~1e-7 of the bounding-box diagonal).
 ReferenceResult tetgen_delaunay(const PointSet& points);
+
+/// The meaning of a TetGen 1.5 library error code (the int its terminatetetgen throws), for
+/// messages: "out of memory", "self-intersection detected", ..., "error code <n>" if unknown.
+std::string tetgen_error_text(int code);
 
 /// CGAL Delaunay_triangulation_3 (Epick). With `order`: inserts one point at a time in that
 /// order, each located from the vertex of its hint. Without: CGAL's own insert(first, last)

@@ -141,18 +141,6 @@ void check_tetgen_can_handle(const PointSet& points) {
   }
 }
 
-/// TetGen's library error codes (terminatetetgen), for messages.
-std::string tetgen_error_text(int code) {
-  switch (code) {
-    case 1: return "out of memory";
-    case 2: return "internal error";
-    case 3: return "self-intersection detected";
-    case 4: return "very small input feature size";
-    case 5: return "two very close input facets";
-    case 10: return "input error (e.g. points (nearly) coplanar)";
-    default: return "error code " + std::to_string(code);
-  }
-}
 
 }  // namespace
 
@@ -184,7 +172,8 @@ ReferenceResult tetgen_delaunay(const PointSet& original) {
   try {
     tetrahedralize(switches, &in, &out);
   } catch (int code) {
-    throw Error("TetGen tetrahedralize failed: " + tetgen_error_text(code));
+    throw Error("TetGen tetrahedralize failed: " + tetgen_error_text(code) +
+                (code == 10 ? " (e.g. points (nearly) coplanar)" : ""));
   } catch (const std::bad_alloc&) {
     throw Error("TetGen tetrahedralize failed: out of memory");
   } catch (const std::exception& e) {
@@ -233,6 +222,18 @@ ReferenceResult tetgen_delaunay(const PointSet& original) {
   }
   result.num_vertices = std::size_t(std::count(used.begin(), used.end(), true));
   return result;
+}
+
+std::string tetgen_error_text(int code) {
+  switch (code) {
+    case 1: return "out of memory";
+    case 2: return "internal error";
+    case 3: return "self-intersection detected";
+    case 4: return "very small input feature size";
+    case 5: return "two very close input facets";
+    case 10: return "input error";
+    default: return "error code " + std::to_string(code);
+  }
 }
 
 }  // namespace kdmesh

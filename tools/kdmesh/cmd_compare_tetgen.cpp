@@ -3,9 +3,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <algorithm>
 #include <iostream>
-#include <map>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <vector>
 
@@ -78,16 +76,7 @@ int run_compare(const Options& o) {
   co.timeout_seconds = o.timeout;
   co.keep_dir = o.keep;
 
-  MeshJobCallbacks cb;
-  cb.log = [&out](const std::string& s) { out.stage(s); };
-  auto bars = std::make_shared<std::map<std::string, std::function<void(double)>>>();
-  auto mutex = std::make_shared<std::mutex>();  // stages may report from worker threads
-  cb.progress = [&out, bars, mutex](const std::string& stage, double f) {
-    std::lock_guard<std::mutex> lock(*mutex);
-    auto it = bars->find(stage);
-    if (it == bars->end()) it = bars->emplace(stage, out.progress(stage)).first;
-    if (it->second) it->second(f);
-  };
+  const MeshJobCallbacks cb = job_callbacks(out);
   const TetgenComparison c = compare_with_tetgen(job, co, cb);
   out.human() << format_comparison(c.report);
   out.emit_json(c.report);

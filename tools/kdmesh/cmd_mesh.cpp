@@ -1,9 +1,7 @@
 // kdmesh mesh — tetrahedral mesh of a closed surface (STL/PLY): the whole pipeline, checked.
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <iostream>
-#include <map>
 #include <memory>
-#include <mutex>
 #include <string>
 
 #include "core/error.h"
@@ -23,17 +21,7 @@ struct Options {
 int run_mesh(const Options& o) {
   const Output& out = o.out;
   const MeshJob job = make_mesh_job(o.mesh);
-  MeshJobCallbacks cb;
-  cb.log = [&out](const std::string& s) { out.stage(s); };
-  // One progress line per stage (rewritten in place on a terminal; silent otherwise).
-  auto bars = std::make_shared<std::map<std::string, std::function<void(double)>>>();
-  auto mutex = std::make_shared<std::mutex>();  // stages may report from worker threads
-  cb.progress = [&out, bars, mutex](const std::string& stage, double f) {
-    std::lock_guard<std::mutex> lock(*mutex);
-    auto it = bars->find(stage);
-    if (it == bars->end()) it = bars->emplace(stage, out.progress(stage)).first;
-    if (it->second) it->second(f);
-  };
+  const MeshJobCallbacks cb = job_callbacks(out);
   const MeshJobResult r = run_mesh_job(job, cb);
   out.human() << format_job_report(r.summary);
   out.emit_json(r.summary);

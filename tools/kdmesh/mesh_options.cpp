@@ -3,6 +3,10 @@
 #include "tools/kdmesh/mesh_options.h"
 
 #include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
 
 #include "core/error.h"
 #include "core/memory_amount.h"
@@ -10,6 +14,20 @@
 #include "mesher/surface_repair.h"
 
 namespace kdmesh::cli {
+
+MeshJobCallbacks job_callbacks(const Output& out) {
+  MeshJobCallbacks cb;
+  cb.log = [&out](const std::string& s) { out.stage(s); };
+  auto bars = std::make_shared<std::map<std::string, std::function<void(double)>>>();
+  auto mutex = std::make_shared<std::mutex>();  // stages may report from worker threads
+  cb.progress = [&out, bars, mutex](const std::string& stage, double f) {
+    std::lock_guard<std::mutex> lock(*mutex);
+    auto it = bars->find(stage);
+    if (it == bars->end()) it = bars->emplace(stage, out.progress(stage)).first;
+    if (it->second) it->second(f);
+  };
+  return cb;
+}
 
 MeshJob make_mesh_job(const MeshCliOptions& o) {
   MeshJob job;

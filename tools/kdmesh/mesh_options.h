@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "tools/kdmesh/cli.h"
 #include "tools/lib/mesh_job.h"
 
 namespace kdmesh::cli {
@@ -44,6 +45,10 @@ struct MeshCliSpec {
   /// --element-order, --msh-version, --patch-groups).
   bool outputs = true;
 };
+
+/// Callbacks that print a job's stages through `out` (stage lines) and one progress line per
+/// stage (rewritten in place on a terminal; silent otherwise). `out` must outlive them.
+MeshJobCallbacks job_callbacks(const Output& out);
 
 /// Registers the job's options on `cmd` (names, help texts, checks and defaults of
 /// `kdmesh mesh`), storing into `o`, which must outlive the parse.

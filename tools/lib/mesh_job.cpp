@@ -129,6 +129,8 @@ nlohmann::json histogram_json(const Histogram& h) {
   return {{"lo", h.lo}, {"hi", h.hi}, {"counts", h.counts}};
 }
 
+}  // namespace
+
 nlohmann::json quality_json(const QualitySummary& q) {
   return {{"tets", q.tets},
           {"inverted", q.inverted},
@@ -142,6 +144,8 @@ nlohmann::json quality_json(const QualitySummary& q) {
           {"min_dihedral_hist", histogram_json(q.min_dihedral_hist)},
           {"radius_ratio_hist", histogram_json(q.radius_ratio_hist)}};
 }
+
+namespace {
 
 nlohmann::json mesh_check_json(const MeshCheck& c) {
   return {{"pass", c.ok()},

@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "mesher/boundary_groups.h"
 #include "mesher/order.h"
+#include "mesher/quality.h"
 #include "mesher/surface_repair.h"
 #include "sizing/sizing_field.h"
 
@@ -93,6 +94,10 @@ struct MeshJobResult {
 /// output at all: every output is first written to a temporary file, and all are renamed into
 /// place only once every one of them has been written.
 MeshJobResult run_mesh_job(const MeshJob& job, const MeshJobCallbacks& callbacks = {});
+
+/// The summary's "quality" block: tets, inverted, min/max dihedral, mean/min radius ratio, max
+/// radius-edge, mean/min volume-length, and the two histograms {lo, hi, counts}.
+nlohmann::json quality_json(const QualitySummary& q);
 
 /// A short human-readable table of a job summary (counts, quality, size fidelity, check,
 /// times, outputs or the error), one item per line, each line ending in '\n'.

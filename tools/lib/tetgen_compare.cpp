@@ -49,6 +49,7 @@
 #include "mesher/order.h"
 #include "mesher/predicates.h"
 #include "mesher/quality.h"
+#include "mesher/reference_delaunay.h"
 #include "mesher/size_fidelity.h"
 #include "mesher/surface_query.h"
 #include "mesher/surface_repair.h"
@@ -303,18 +304,6 @@ double proc_status_bytes(const char* key) {
   while (std::getline(f, line))
     if (line.compare(0, n, key) == 0) return 1024.0 * std::strtod(line.c_str() + n, nullptr);
   return 0;
-}
-
-std::string tetgen_error_text(int code) {
-  switch (code) {
-    case 1: return "out of memory";
-    case 2: return "internal error";
-    case 3: return "self-intersection detected";
-    case 4: return "very small input feature size";
-    case 5: return "two very close input facets";
-    case 10: return "input error";
-    default: return "error code " + std::to_string(code);
-  }
 }
 
 /// Copies `n` values into a new[] array (tetgenio frees its arrays with delete[]).
@@ -592,12 +581,6 @@ TetgenRun run_tetgen(const PreparedSurface& surface, const PointSet& holes, cons
 
 // ---- measures ------------------------------------------------------------------------------
 
-namespace {
-
-nlohmann::json histogram_json(const Histogram& h) { return {{"lo", h.lo}, {"hi", h.hi}, {"counts", h.counts}}; }
-
-}  // namespace
-
 nlohmann::json measure_mesh(const TetMesh& mesh, const SizingField& sizing, double solid_volume) {
   std::vector<TetQuality> per;
   const QualitySummary q = summarize_quality(mesh, &per);
@@ -614,18 +597,7 @@ nlohmann::json measure_mesh(const TetMesh& mesh, const SizingField& sizing, doub
   const SizeFidelity f = measure_size_fidelity(mesh.points, mesh.tets, sizing);
   return {{"nodes", std::count(used.begin(), used.end(), true)},
           {"tets", mesh.num_tets()},
-          {"quality",
-           {{"tets", q.tets},
-            {"inverted", q.inverted},
-            {"min_dihedral", q.min_dihedral},
-            {"max_dihedral", q.max_dihedral},
-            {"mean_radius_ratio", q.mean_radius_ratio},
-            {"min_radius_ratio", q.min_radius_ratio},
-            {"max_radius_edge", q.max_radius_edge},
-            {"mean_volume_length", q.mean_volume_length},
-            {"min_volume_length", q.min_volume_length},
-            {"min_dihedral_hist", histogram_json(q.min_dihedral_hist)},
-            {"radius_ratio_hist", histogram_json(q.radius_ratio_hist)}}},
+          {"quality", quality_json(q)},
           {"min_dihedral_below", {{"5", below5}, {"10", below10}, {"12", below12}}},
           {"volume",
            {{"mesh", volume},
