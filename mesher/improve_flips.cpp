@@ -21,9 +21,8 @@ double min_sine(const ImproveTets& m, const std::vector<std::uint32_t>& ids) {
   return q;
 }
 
-namespace {
-
-bool all_valid(const ImproveTets& m, const std::vector<std::uint32_t>& fresh) {
+bool flip_valid(const ImproveTets& m, const FlipCandidate& c) {
+  const std::vector<std::uint32_t>& fresh = c.fresh;
   for (std::size_t k = 0; k < fresh.size(); k += 4) {
     const double* p[4] = {m.p(fresh[k]), m.p(fresh[k + 1]), m.p(fresh[k + 2]), m.p(fresh[k + 3])};
     if (!tet_valid(p[0], p[1], p[2], p[3]) || !m.inside_ok(&fresh[k], p)) return false;
@@ -31,10 +30,9 @@ bool all_valid(const ImproveTets& m, const std::vector<std::uint32_t>& fresh) {
   return true;
 }
 
-}  // namespace
-
 bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::uint32_t b,
-                  int max_ring, FlipCandidate& out, double floor) {
+                  int max_ring, FlipCandidate& out, double floor, const double* sines,
+                  bool validate) {
   static thread_local std::vector<std::uint32_t> ring;
   out.old.clear();
   out.fresh.clear();
@@ -42,7 +40,12 @@ bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::u
   if (!m.edge_ring(t, a, b, ring, out.old)) return false;
   const int n = int(ring.size());
   if (n < 3 || n > max_ring) return false;
-  out.q_old = min_sine(m, out.old);
+  if (sines) {
+    out.q_old = std::numeric_limits<double>::infinity();
+    for (std::uint32_t o : out.old) out.q_old = std::min(out.q_old, sines[o]);
+  } else {
+    out.q_old = min_sine(m, out.old);
+  }
   // Only triangulations better than `floor` and than the ring's own tets are of interest:
   // sub-polygons that cannot beat it are cut off (-inf) without evaluating their tets.
   const double cut = std::max(floor, out.q_old);
@@ -89,10 +92,11 @@ bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::u
     stack[sp][0] = i, stack[sp][1] = k, ++sp;
     stack[sp][0] = k, stack[sp][1] = j, ++sp;
   }
-  return all_valid(m, out.fresh);
+  return !validate || flip_valid(m, out);
 }
 
-bool face_removal(const ImproveTets& m, std::uint32_t t, int i, FlipCandidate& out) {
+bool face_removal(const ImproveTets& m, std::uint32_t t, int i, FlipCandidate& out,
+                  const double* sines, bool validate) {
   out.old.clear();
   out.fresh.clear();
   out.q_new = -1;
@@ -105,7 +109,7 @@ bool face_removal(const ImproveTets& m, std::uint32_t t, int i, FlipCandidate& o
   // kFace is outward from t (p on its negative side); reversed, p is on the positive side.
   const std::uint32_t x = v[kFace[i][0]], y = v[kFace[i][2]], z = v[kFace[i][1]];
   out.old = {t, u};
-  out.q_old = std::min(sine_of(m, t), sine_of(m, u));
+  out.q_old = sines ? std::min(sines[t], sines[u]) : std::min(sine_of(m, t), sine_of(m, u));
   out.fresh = {x, y, q, p, y, z, q, p, z, x, q, p};
   double qn = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < out.fresh.size(); k += 4)
@@ -113,7 +117,7 @@ bool face_removal(const ImproveTets& m, std::uint32_t t, int i, FlipCandidate& o
                                m.p(out.fresh[k + 3])));
   out.q_new = qn;
   if (!(qn > 0)) return false;
-  return all_valid(m, out.fresh);
+  return !validate || flip_valid(m, out);
 }
 
 }  // namespace kdmesh

@@ -24,13 +24,23 @@ struct FlipCandidate {
 /// is on the boundary, the ring is too large, or no triangulation gives valid tets whose
 /// smallest tet_sine exceeds both `floor` and that of the ring's tets (so a true result
 /// improves the mesh).
+/// `sines`, if given, holds tet_sine of every live slot of m (saves recomputing the old tets').
+/// With validate = false the new tets' validity (tet_valid, ImproveTets::inside_ok) is left
+/// to the caller (flip_valid), who may check only the candidate it picks.
 bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::uint32_t b,
-                  int max_ring, FlipCandidate& out, double floor = -1);
+                  int max_ring, FlipCandidate& out, double floor = -1,
+                  const double* sines = nullptr, bool validate = true);
 
 /// Face removal: face i of tet t (opposite p) shared with tet u (opposite q) replaced by the
 /// three tets around the new edge pq (a 2-3 flip). False on a boundary face or if pq does not
 /// cross the face's interior (a new tet would not be valid).
-bool face_removal(const ImproveTets& m, std::uint32_t t, int i, FlipCandidate& out);
+/// `sines` and `validate` as for edge_removal.
+bool face_removal(const ImproveTets& m, std::uint32_t t, int i, FlipCandidate& out,
+                  const double* sines = nullptr, bool validate = true);
+
+/// Every new tet of `c` exactly positively oriented, not flat, and inside the solid where
+/// ImproveTets::inside_ok asks (the check edge_removal and face_removal make by default).
+bool flip_valid(const ImproveTets& m, const FlipCandidate& c);
 
 /// Smallest tet_sine over the tets `ids` of m.
 double min_sine(const ImproveTets& m, const std::vector<std::uint32_t>& ids);

@@ -36,21 +36,34 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
                          const std::vector<std::uint32_t>& region)
     : nodes_(&nodes) {
   const std::size_t nt = tets.size() / 4, np = nodes.size_count();
-  tv_ = tets;
-  tv_.resize(4 * nt);
+  for (std::size_t i = 0; i < 4 * nt; ++i)
+    if (tets[i] >= np)
+      throw UsageError("improve_mesh: tet " + std::to_string(i / 4) + " references node " +
+                       std::to_string(tets[i]) + " of " + std::to_string(np));
+  // Slots in the order of each tet's smallest vertex id (a counting sort; stable): the tets
+  // around a vertex then lie close together in memory when nearby nodes have nearby ids,
+  // which the passes' star walks (and the input order, in insertion order) need.
+  {
+    std::vector<std::uint32_t> count(np + 1, 0), order(nt);
+    auto min_of = [&](std::size_t t) {
+      return std::min(std::min(tets[4 * t], tets[4 * t + 1]), std::min(tets[4 * t + 2], tets[4 * t + 3]));
+    };
+    for (std::size_t t = 0; t < nt; ++t) ++count[min_of(t) + 1];
+    for (std::size_t k = 0; k < np; ++k) count[k + 1] += count[k];
+    for (std::size_t t = 0; t < nt; ++t) order[count[min_of(t)]++] = std::uint32_t(t);
+    tv_.resize(4 * nt);
+    region_.assign(nt, 0);
+    for (std::size_t s = 0; s < nt; ++s) {
+      std::copy_n(&tets[4 * std::size_t(order[s])], 4, &tv_[4 * s]);
+      if (order[s] < region.size()) region_[s] = region[order[s]];
+    }
+  }
   ta_.assign(4 * nt, kImproveNone);
-  region_.assign(nt, 0);
-  for (std::size_t t = 0; t < nt && t < region.size(); ++t) region_[t] = region[t];
   version_.assign(nt, 0);
   vtet_.assign(np, kImproveNone);
   mark_.assign(nt, 0);
   for (std::size_t t = 0; t < nt; ++t)
-    for (int i = 0; i < 4; ++i) {
-      if (tv_[4 * t + i] >= np)
-        throw UsageError("improve_mesh: tet " + std::to_string(t) + " references node " +
-                         std::to_string(tv_[4 * t + i]) + " of " + std::to_string(np));
-      vtet_[tv_[4 * t + i]] = std::uint32_t(t);
-    }
+    for (int i = 0; i < 4; ++i) vtet_[tv_[4 * t + i]] = std::uint32_t(t);
   // Faces bucketed by their smallest vertex (counting sort), each bucket sorted by the two
   // other vertices, equal neighbours matched.
   struct Rec {

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <queue>
+#include <thread>
 #include <tuple>
 
 #include "core/error.h"
@@ -58,27 +59,49 @@ struct Counters {
   std::size_t edge_removals = 0, face_removals = 0;
 };
 
-/// tet_sine of every tet slot (+inf for dead slots), in parallel.
-std::vector<double> sines(const ImproveTets& m, unsigned threads) {
-  std::vector<double> q(m.capacity(), std::numeric_limits<double>::infinity());
-  parallel_for(q.size(), [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t t = b; t < e; ++t)
-      if (m.alive(std::uint32_t(t))) q[t] = sine_of(m, std::uint32_t(t));
-  }, 65536, threads);
-  return q;
-}
+/// tet_sine of every tet slot (+inf for dead slots), kept up to date by the passes so that a
+/// stage that changes little costs little: flips set the slots they kill and create, vertex
+/// passes the stars of the vertices they moved.
+class SineCache {
+ public:
+  SineCache(const ImproveTets& m, unsigned threads) : m_(m), threads_(threads) { refresh_all(); }
+  const std::vector<double>& q() const { return q_; }
+  void refresh_all() {
+    q_.assign(m_.capacity(), std::numeric_limits<double>::infinity());
+    parallel_for(q_.size(), [&](std::size_t b, std::size_t e, unsigned) {
+      for (std::size_t t = b; t < e; ++t)
+        if (m_.alive(std::uint32_t(t))) q_[t] = sine_of(m_, std::uint32_t(t));
+    }, 65536, threads_);
+  }
+  /// Slot t changed (created, killed, or a vertex moved); returns its sine.
+  double refresh(std::uint32_t t) {
+    if (t >= q_.size()) q_.resize(m_.capacity(), std::numeric_limits<double>::infinity());
+    return q_[t] = m_.alive(t) ? sine_of(m_, t) : std::numeric_limits<double>::infinity();
+  }
+  /// The vertices in `moved` changed position.
+  void refresh_stars(const std::vector<std::uint32_t>& moved) {
+    if (moved.size() > m_.capacity() / 64) return refresh_all();
+    std::vector<std::uint32_t> star;
+    for (std::uint32_t v : moved) {
+      m_.star(v, star);
+      for (std::uint32_t t : star) refresh(t);
+    }
+  }
+
+ private:
+  const ImproveTets& m_;
+  unsigned threads_;
+  std::vector<double> q_;
+};
 
 /// Flips until no tet below `threshold` has an improving edge or face removal. Tets are
 /// taken worst first (ties by id); each takes the best of its candidates.
-std::size_t flip_pass(ImproveTets& m, double threshold, int max_ring, unsigned threads,
+std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring,
                       Counters& c) {
   using Entry = std::tuple<double, std::uint32_t, std::uint32_t>;  // quality, tet, version
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
-  {
-    const std::vector<double> q = sines(m, threads);
-    for (std::uint32_t t = 0; t < m.capacity(); ++t)
-      if (q[t] < threshold) heap.emplace(q[t], t, m.version(t));
-  }
+  for (std::uint32_t t = 0; t < m.capacity(); ++t)
+    if (cache.q()[t] < threshold) heap.emplace(cache.q()[t], t, m.version(t));
   std::size_t ops = 0;
   FlipCandidate cand, best;
   std::vector<std::uint32_t> created;
@@ -91,15 +114,19 @@ std::size_t flip_pass(ImproveTets& m, double threshold, int max_ring, unsigned t
     best.q_old = 0;
     bool have = false, best_is_edge = false;
     const std::uint32_t* v = m.v(t);
+    // Validity (exact orientation, inside tests) is checked last, only for a candidate that
+    // would become the best: the same choice as checking every candidate, for less work.
+    const double* sines = cache.q().data();
     for (const auto& e : kEdge)
-      if (edge_removal(m, t, v[e[0]], v[e[1]], max_ring, cand, have ? best.q_new : -1) &&
-          cand.improves() &&
-          (!have || cand.q_new > best.q_new)) {
+      if (edge_removal(m, t, v[e[0]], v[e[1]], max_ring, cand, have ? best.q_new : -1, sines,
+                       false) &&
+          cand.improves() && (!have || cand.q_new > best.q_new) && flip_valid(m, cand)) {
         std::swap(best, cand);
         have = best_is_edge = true;
       }
     for (int i = 0; i < 4; ++i)
-      if (face_removal(m, t, i, cand) && cand.improves() && (!have || cand.q_new > best.q_new)) {
+      if (face_removal(m, t, i, cand, sines, false) && cand.improves() &&
+          (!have || cand.q_new > best.q_new) && flip_valid(m, cand)) {
         std::swap(best, cand);
         have = true;
         best_is_edge = false;
@@ -108,88 +135,95 @@ std::size_t flip_pass(ImproveTets& m, double threshold, int max_ring, unsigned t
     if (!m.replace(best.old, best.fresh, &created)) continue;
     ++ops;
     ++(best_is_edge ? c.edge_removals : c.face_removals);
+    for (std::uint32_t o : best.old) cache.refresh(o);
     for (std::uint32_t n : created) {
-      const double qn = sine_of(m, n);
+      const double qn = cache.refresh(n);
       if (qn < threshold) heap.emplace(qn, n, m.version(n));
     }
   }
   return ops;
 }
 
-/// Calls move(v) for every vertex of `verts` (sorted ids), two threads or more at a time but
-/// with a result independent of their number. The vertices are labelled by fixed slabs along
-/// the longest axis of the mesh's bounding box (from their positions at the start). A vertex
-/// whose neighbours all lie in its own or the two adjacent slabs is "local": two local vertices
-/// of different even slabs are never neighbours (a neighbour's slab differs by at most one),
-/// so their stars share no tet and neither reads a position the other writes. Phase 1 runs
-/// the even slabs in parallel, each sequentially in id order; phase 2 the odd slabs; phase 3
-/// the non-local vertices sequentially in id order.
+/// Calls move(v) for every vertex of `verts` (sorted ids), on up to `threads` threads, with a
+/// result independent of their number. A move reads the positions of the vertex's star and
+/// writes only its own position (and surface facet), so two vertices that share no tet may
+/// move at the same time. The vertices are coloured greedily in id order (each takes the
+/// smallest colour none of its earlier neighbours in `verts` has); the colours run one after
+/// another, in each colour all its vertices at once. Every move therefore sees the same
+/// positions whatever the thread count: neighbours of an earlier colour have moved, those of
+/// a later one have not.
 template <class Move>
-std::size_t slab_pass(ImproveTets& m, const std::vector<std::uint32_t>& verts, unsigned threads,
-                      Move&& move) {
-  constexpr int kSlabs = 16;
-  const NodeSet& nodes = m.nodes();
-  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-  for (std::size_t i = 0; i < nodes.size_count(); ++i)
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], nodes.points.p(std::uint32_t(i))[k]);
-      hi[k] = std::max(hi[k], nodes.points.p(std::uint32_t(i))[k]);
-    }
-  int axis = 0;
-  for (int k = 1; k < 3; ++k)
-    if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
-  const double width = (hi[axis] - lo[axis]) / kSlabs;
-  std::vector<std::uint8_t> slab(nodes.size_count());
-  for (std::size_t i = 0; i < slab.size(); ++i) {
-    const double x = nodes.points.p(std::uint32_t(i))[axis];
-    slab[i] = std::uint8_t(std::clamp(int(width > 0 ? (x - lo[axis]) / width : 0), 0, kSlabs - 1));
-  }
-  std::vector<std::uint8_t> local(verts.size(), 0);
-  parallel_for(verts.size(), [&](std::size_t b, std::size_t e, unsigned) {
+std::vector<std::uint32_t> colour_pass(ImproveTets& m, const std::vector<std::uint32_t>& verts,
+                                       unsigned threads, Move&& move) {
+  const std::size_t n = verts.size();
+  std::vector<std::uint32_t> slot(m.nodes().size_count(), kImproveNone);
+  for (std::size_t k = 0; k < n; ++k) slot[verts[k]] = std::uint32_t(k);
+  // Earlier neighbours of each vertex (positions in verts): each worker lists those of its
+  // contiguous range, then the lists are laid out in order.
+  std::vector<std::uint32_t> start(n + 1, 0), nb;
+  std::vector<std::vector<std::uint32_t>> lists(std::max(1u, std::thread::hardware_concurrency()));
+  std::vector<std::size_t> first(lists.size(), n);
+  parallel_for(n, [&](std::size_t b, std::size_t e, unsigned w) {
     std::vector<std::uint32_t> star;
+    std::vector<std::uint32_t>& out = lists[w];
+    first[w] = b;
     for (std::size_t k = b; k < e; ++k) {
       const std::uint32_t v = verts[k];
       m.star(v, star);
-      bool ok = true;
+      const std::size_t before = out.size();
       for (std::uint32_t t : star)
-        for (int i = 0; i < 4 && ok; ++i) ok = std::abs(int(slab[m.v(t)[i]]) - int(slab[v])) <= 1;
-      local[k] = ok;
+        for (int i = 0; i < 4; ++i) {
+          const std::uint32_t u = m.v(t)[i];
+          if (u != v && slot[u] < k) out.push_back(slot[u]);
+        }
+      start[k + 1] = std::uint32_t(out.size() - before);
     }
   }, 1024, threads);
-  std::vector<std::vector<std::uint32_t>> by_slab(kSlabs);
-  std::vector<std::uint32_t> rest;
-  for (std::size_t k = 0; k < verts.size(); ++k)
-    (local[k] ? by_slab[slab[verts[k]]] : rest).push_back(verts[k]);
-  std::vector<std::size_t> moved(kSlabs, 0);
-  for (int phase = 0; phase < 2; ++phase)
-    parallel_for(kSlabs / 2, [&](std::size_t b, std::size_t e, unsigned) {
-      for (std::size_t j = b; j < e; ++j) {
-        const std::size_t s = 2 * j + std::size_t(phase);
-        for (std::uint32_t v : by_slab[s]) moved[s] += move(v);
-      }
-    }, 1, threads);
-  std::size_t total = 0;
-  for (std::size_t x : moved) total += x;
-  for (std::uint32_t v : rest) total += move(v);
-  return total;
+  for (std::size_t k = 0; k < n; ++k) start[k + 1] += start[k];
+  nb.resize(start[n]);
+  for (std::size_t w = 0; w < lists.size(); ++w)
+    if (first[w] < n) std::copy(lists[w].begin(), lists[w].end(), nb.begin() + start[first[w]]);
+  // Greedy colouring (a neighbour seen through several tets is listed several times).
+  std::vector<std::uint32_t> colour(n), used;
+  std::uint32_t colours = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    used.assign(colours + 1, 0);
+    for (std::uint32_t i = start[k]; i < start[k + 1]; ++i) used[colour[nb[i]]] = 1;
+    std::uint32_t c = 0;
+    while (used[c]) ++c;
+    colour[k] = c;
+    colours = std::max(colours, c + 1);
+  }
+  std::vector<std::vector<std::uint32_t>> by_colour(colours);
+  for (std::size_t k = 0; k < n; ++k) by_colour[colour[k]].push_back(verts[k]);
+  std::vector<std::uint8_t> moved(n, 0);
+  for (const std::vector<std::uint32_t>& group : by_colour)
+    parallel_for(group.size(), [&](std::size_t b, std::size_t e, unsigned) {
+      for (std::size_t k = b; k < e; ++k) moved[slot[group[k]]] = move(group[k]);
+    }, 256, threads);
+  std::vector<std::uint32_t> out;
+  for (std::size_t k = 0; k < n; ++k)
+    if (moved[k]) out.push_back(verts[k]);
+  return out;
 }
 
-/// Smooths every vertex of a tet below `threshold`.
-std::size_t smooth_pass(ImproveTets& m, double threshold, const SmoothContext& ctx,
-                        unsigned threads) {
+/// Smooths every vertex of a tet below `threshold`; returns the vertices moved.
+std::vector<std::uint32_t> smooth_pass(ImproveTets& m, const SineCache& cache, double threshold,
+                                       const SmoothContext& ctx, unsigned threads) {
   std::vector<std::uint8_t> pick(m.nodes().size_count(), 0);
-  const std::vector<double> q = sines(m, threads);
+  const std::vector<double>& q = cache.q();
   for (std::uint32_t t = 0; t < m.capacity(); ++t)
     if (q[t] < threshold)
       for (int i = 0; i < 4; ++i) pick[m.v(t)[i]] = 1;
   std::vector<std::uint32_t> verts;
   for (std::uint32_t v = 0; v < pick.size(); ++v)
     if (pick[v]) verts.push_back(v);
-  return slab_pass(m, verts, threads, [&](std::uint32_t v) { return smooth_vertex(m, v, ctx); });
+  return colour_pass(m, verts, threads, [&](std::uint32_t v) { return smooth_vertex(m, v, ctx); });
 }
 
-/// Smart-Laplacian relaxation of every vertex of a tet whose radius ratio is below `below`.
-std::size_t relax_pass(ImproveTets& m, double below, double floor, const SmoothContext& ctx,
+/// Smart-Laplacian relaxation of every vertex of a tet whose radius ratio is below `below`;
+/// returns the vertices moved.
+std::vector<std::uint32_t> relax_pass(ImproveTets& m, double below, double floor, const SmoothContext& ctx,
                        unsigned threads) {
   std::vector<std::uint8_t> low(m.capacity(), 0), pick(m.nodes().size_count(), 0);
   parallel_for(low.size(), [&](std::size_t b, std::size_t e, unsigned) {
@@ -205,7 +239,7 @@ std::size_t relax_pass(ImproveTets& m, double below, double floor, const SmoothC
   std::vector<std::uint32_t> verts;
   for (std::uint32_t v = 0; v < pick.size(); ++v)
     if (pick[v]) verts.push_back(v);
-  return slab_pass(m, verts, threads,
+  return colour_pass(m, verts, threads,
                    [&](std::uint32_t v) { return relax_vertex(m, v, ctx, floor); });
 }
 
@@ -249,18 +283,23 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
   const double threshold = deg_to_sine(options.work_angle);
   const double smooth_threshold = deg_to_sine(options.smooth_angle);
   Counters c;
+  SineCache cache(m, options.threads);
   for (int r = 0; r < options.rounds; ++r) {
     const std::string n = std::to_string(r + 1);
-    const std::size_t ops = flip_pass(m, threshold, options.max_ring, options.threads, c);
+    const std::size_t ops = flip_pass(m, cache, threshold, options.max_ring, c);
     stage("flip " + n, ops);
     if (r < options.relax_rounds) {
-      const std::size_t relaxed = relax_pass(m, options.relax_below, threshold, ctx, options.threads);
-      st.relaxed += relaxed;
-      stage("relax " + n, relaxed);
+      const std::vector<std::uint32_t> relaxed =
+          relax_pass(m, options.relax_below, threshold, ctx, options.threads);
+      cache.refresh_stars(relaxed);
+      st.relaxed += relaxed.size();
+      stage("relax " + n, relaxed.size());
     }
-    const std::size_t moved = smooth_pass(m, smooth_threshold, ctx, options.threads);
-    st.smoothed += moved;
-    stage("smooth " + n, moved);
+    const std::vector<std::uint32_t> moved =
+        smooth_pass(m, cache, smooth_threshold, ctx, options.threads);
+    cache.refresh_stars(moved);
+    st.smoothed += moved.size();
+    stage("smooth " + n, moved.size());
   }
   st.edge_removals = c.edge_removals;
   st.face_removals = c.face_removals;
