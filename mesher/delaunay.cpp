@@ -255,6 +255,12 @@ class Kernel {
     throw Error("delaunay: point location did not terminate (internal error)");
   }
 
+  bool in_conflict(std::uint32_t n, const double* p) const {
+    const std::uint32_t* v = &T_[8 * std::size_t(n)];
+    if ((v[0] | v[1] | v[2] | v[3]) == kInf) return tet_in_conflict(xyz_, T_.data(), n, p);
+    return pred::insphere_perturbed(P(v[0]), P(v[1]), P(v[2]), P(v[3]), p) > 0;
+  }
+
   void grow_cavity(std::uint32_t base, const double* p) {
     cavity_.clear();
     touched_.clear();
@@ -265,7 +271,7 @@ class Kernel {
       for (int f = 0; f < 4; ++f) {
         const std::uint32_t n = adj(c, f) >> 2;
         if (state_[n] != kUnvisited) continue;
-        if (tet_in_conflict(xyz_, T_.data(), n, p)) {
+        if (in_conflict(n, p)) {
           state_[n] = kInCavity;
           cavity_.push_back(n);
         } else {

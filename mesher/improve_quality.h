@@ -77,6 +77,48 @@ inline double tet_radius_ratio(const double* a, const double* b, const double* c
 
 inline double tet_sine(const double* const* p) { return tet_sine(p[0], p[1], p[2], p[3]); }
 
+/// tet_sine and tet_radius_ratio of one tet from shared edge vectors and face normals: the
+/// same values, bit for bit, as the two functions (the same operations in the same order).
+struct SineRatio {
+  double sine;   ///< tet_sine
+  double ratio;  ///< tet_radius_ratio
+};
+inline SineRatio tet_sine_ratio(const double* a, const double* b, const double* c,
+                                const double* d) {
+  auto sub = [](const double* p, const double* q, double* r) {
+    r[0] = p[0] - q[0], r[1] = p[1] - q[1], r[2] = p[2] - q[2];
+  };
+  auto cross = [](const double* u, const double* w, double* r) {
+    r[0] = u[1] * w[2] - u[2] * w[1], r[1] = u[2] * w[0] - u[0] * w[2], r[2] = u[0] * w[1] - u[1] * w[0];
+  };
+  auto len = [](const double* u) { return std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]); };
+  double ab[3], ac[3], ad[3], bc[3], bd[3], cd[3];
+  sub(b, a, ab), sub(c, a, ac), sub(d, a, ad), sub(c, b, bc), sub(d, b, bd), sub(d, c, cd);
+  double nb[3], na[3], nc[3], nd[3];  // normals of the faces opposite b, a, c, d
+  cross(ac, ad, nb);
+  const double det = ab[0] * nb[0] + ab[1] * nb[1] + ab[2] * nb[2];  // 6 V
+  if (!(det > 0)) return {-1, 0};
+  cross(bc, bd, na);
+  cross(ab, ad, nc);
+  cross(ab, ac, nd);
+  const double Na = len(na), Nb = len(nb), Nc = len(nc), Nd = len(nd);
+  const double m = std::min({len(ab) * Na * Nb, len(ac) * Na * Nc, len(ad) * Na * Nd,
+                             len(bc) * Nb * Nc, len(bd) * Nb * Nd, len(cd) * Nc * Nd});
+  const double prod = Na * Nb * Nc * Nd;
+  SineRatio r;
+  r.sine = prod > 0 ? det * m / prod : -1;
+  // tet_radius_ratio with e1 = ab, e2 = ac, e3 = ad: c23 = nb, c31 = ad x ab = -nc, c12 = nd.
+  const double s1 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+  const double s2 = ac[0] * ac[0] + ac[1] * ac[1] + ac[2] * ac[2];
+  const double s3 = ad[0] * ad[0] + ad[1] * ad[1] + ad[2] * ad[2];
+  double off[3];
+  for (int k = 0; k < 3; ++k) off[k] = (s1 * nb[k] + s2 * -nc[k] + s3 * nd[k]) / (2 * det);
+  const double R = len(off);
+  const double area2 = Nd + Nb + Nc + Na;
+  r.ratio = 3 * (det / area2) / R;
+  return r;
+}
+
 /// A tet the pass may create: exactly positively oriented and not flat at rounding level.
 inline bool tet_valid(const double* a, const double* b, const double* c, const double* d) {
   return pred::orient3d(a, b, c, d) > 0 && volume_length(a, b, c, d) >= kZeroVolumeLength;

@@ -133,17 +133,21 @@ class VertexStar {
     for (std::size_t j = 0; j < st_.size(); ++j) q = std::min(q, eval_tet(j, x));
     return q;
   }
-  /// Sum of the radius ratios of the star with v at x (-inf if a tet is inverted).
-  double eval_sum_ratio(const double* x) const {
-    double s = 0;
+  /// With v at x: the smallest tet_sine of the star (eval) and the sum of its radius ratios
+  /// (-inf if a tet is inverted), in one sweep.
+  SineRatio eval_both(const double* x) const {
+    SineRatio out{std::numeric_limits<double>::infinity(), 0};
+    bool inverted = false;
     for (const StarTet& t : st_) {
       const double* p[4] = {t.p[0], t.p[1], t.p[2], t.p[3]};
       p[t.iv] = x;
-      const double r = tet_radius_ratio(p[0], p[1], p[2], p[3]);
-      if (!(r > 0)) return -std::numeric_limits<double>::infinity();
-      s += r;
+      const SineRatio q = tet_sine_ratio(p[0], p[1], p[2], p[3]);
+      out.sine = std::min(out.sine, q.sine);
+      inverted = inverted || !(q.ratio > 0);
+      out.ratio += q.ratio;
     }
-    return s;
+    if (inverted) out.ratio = -std::numeric_limits<double>::infinity();
+    return out;
   }
   /// Projects x onto the facet plane (surface nodes).
   void project(double* x) const {
@@ -161,10 +165,12 @@ class VertexStar {
   /// is fixed: while every face keeps its orientation, v stays in the polygon's kernel and the
   /// new fan covers the same polygon as the old one, i.e. the same part of the surface.
   bool acceptable(const double* x) const {
-    for (const StarTet& s : st_) {
+    for (std::size_t j = 0; j < st_.size(); ++j) {
+      const StarTet& s = st_[j];
       const double* p[4] = {s.p[0], s.p[1], s.p[2], s.p[3]};
       p[s.iv] = x;
-      if (!tet_valid(p[0], p[1], p[2], p[3]) || !m_->inside_ok(s.ids, p)) return false;
+      if (!tet_valid(p[0], p[1], p[2], p[3]) || !m_->inside_ok_moved(star_[j], s.iv, x))
+        return false;
     }
     if (!on_surface_) return true;
     for (std::size_t k = 0; k < bfaces_.size(); ++k) {
@@ -180,6 +186,7 @@ class VertexStar {
   /// Moves v to x (already acceptable).
   void commit(ImproveTets& m, const double* x) const {
     std::copy_n(x, 3, m.p_mut(v_));
+    for (std::uint32_t t : star_) m.mark_inside(t);  // acceptable(x) checked every one
     if (on_surface_ && !in_facet(x)) {
       double cp[3];
       std::uint32_t facet = kNoFacet;
@@ -282,15 +289,15 @@ bool relax_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, dou
   for (std::uint32_t w : vs.link())
     for (int k = 0; k < 3; ++k) c[k] += m.p(w)[k];
   for (double& ck : c) ck /= double(vs.link().size());
-  const double q_old = vs.eval(x0);
-  const double s_old = vs.eval_sum_ratio(x0);
-  const double q_floor = std::min(q_old, floor);
+  const SineRatio old = vs.eval_both(x0);
+  const double q_floor = std::min(old.sine, floor);
   for (double f : {1.0, 0.5, 0.25}) {
     double y[3];
     for (int k = 0; k < 3; ++k) y[k] = x0[k] + f * (c[k] - x0[k]);
     vs.project(y);
-    if (!(vs.eval_sum_ratio(y) > s_old)) continue;
-    if (vs.eval(y) < q_floor) continue;
+    const SineRatio now = vs.eval_both(y);
+    if (!(now.ratio > old.ratio)) continue;
+    if (now.sine < q_floor) continue;
     if (!vs.acceptable(y)) continue;
     vs.commit(m, y);
     return true;

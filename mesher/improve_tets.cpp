@@ -62,6 +62,7 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
   version_.assign(nt, 0);
   vtet_.assign(np, kImproveNone);
   mark_.assign(nt, 0);
+  inside_known_.assign(nt, 0);
   for (std::size_t t = 0; t < nt; ++t)
     for (int i = 0; i < 4; ++i) vtet_[tv_[4 * t + i]] = std::uint32_t(t);
   // Faces bucketed by their smallest vertex (counting sort), each bucket sorted by the two
@@ -110,6 +111,7 @@ std::uint32_t ImproveTets::new_slot() {
   if (!free_.empty()) {
     const std::uint32_t t = free_.back();
     free_.pop_back();
+    inside_known_[t] = 0;
     return t;
   }
   const std::uint32_t t = std::uint32_t(tv_.size() / 4);
@@ -118,6 +120,7 @@ std::uint32_t ImproveTets::new_slot() {
   region_.push_back(0);
   version_.push_back(0);
   mark_.push_back(0);
+  inside_known_.push_back(0);
   return t;
 }
 

@@ -74,9 +74,36 @@ class ImproveTets {
     for (int k = 0; k < 4; ++k) on_surface += nodes_->kind[ids[k]] != NodeKind::interior;
     if (on_surface < 2) return true;
     double c[3];
-    for (int i = 0; i < 3; ++i) c[i] = (p[0][i] + p[1][i] + p[2][i] + p[3][i]) / 4;
+    centroid(p, c);
     return inside_query->side(c) > 0;
   }
+  /// The centroid as inside_ok computes it (one formula, so a marked centroid is recomputed
+  /// bit for bit).
+  static void centroid(const double* const* p, double* c) {
+    for (int i = 0; i < 3; ++i) c[i] = (p[0][i] + p[1][i] + p[2][i] + p[3][i]) / 4;
+  }
+
+  /// inside_ok for tet t with its vertex in slot iv moved to x. When t's current centroid is
+  /// known to be strictly inside (mark_inside), a move whose centroid path stays clear of every
+  /// facet's bounding box is accepted without the ray-parity query (exact: the side cannot
+  /// change along a segment that does not meet the surface).
+  bool inside_ok_moved(std::uint32_t t, int iv, const double* x) const {
+    if (!inside_query) return true;
+    const std::uint32_t* ids = v(t);
+    const double* p[4] = {this->p(ids[0]), this->p(ids[1]), this->p(ids[2]), this->p(ids[3])};
+    int on_surface = 0;
+    for (int k = 0; k < 4; ++k) on_surface += nodes_->kind[ids[k]] != NodeKind::interior;
+    if (on_surface < 2) return true;
+    double c0[3], c1[3];
+    centroid(p, c0);
+    p[iv] = x;
+    centroid(p, c1);
+    if (inside_known_[t] && !inside_query->box_may_touch(c0, c1)) return true;
+    return inside_query->side(c1) > 0;
+  }
+  /// Tet t's centroid (at the current positions) passed inside_ok or inside_ok_moved. Threads
+  /// may mark different tets at once.
+  void mark_inside(std::uint32_t t) { inside_known_[t] = 1; }
 
   /// Writes the tets back (compacted, in slot order), the regions, and the boundary faces:
   /// the faces of mesh.boundary that are still boundary faces keep their order and vertex
@@ -92,6 +119,7 @@ class ImproveTets {
   std::vector<std::uint32_t> tv_, ta_, region_, version_, vtet_, free_;
   // Scratch of replace().
   std::vector<std::uint32_t> mark_;
+  std::vector<std::uint8_t> inside_known_;  // per slot: centroid certified strictly inside
   std::uint32_t mark_stamp_ = 0;
 };
 

@@ -12,11 +12,12 @@
 // determinant is evaluated exactly in integer arithmetic (every double is an integer times a
 // power of two). Two bounds, both from Shewchuk's stage-A analysis (error <= c*eps*permanent,
 // c = 7 for orient3d, 16 for insphere, for exactly this evaluation order):
-//  - semi-static (cheap): the permanent is bounded by the largest coordinate differences
-//    m_x, m_y, m_z (M = their max): orient3d permanent <= 6 m_x m_y m_z, insphere permanent
-//    <= 72 M^2 m_x m_y m_z (lifts <= 3M^2; 4 lifts x 3 terms x 2 m_x m_y m_z). Valid while those
-//    products neither underflow nor overflow, which the range checks guarantee;
-//  - otherwise the permanent itself is computed (any finite input).
+//  - semi-static (cheap): for orient3d the permanent is bounded by the largest coordinate
+//    differences m_x, m_y, m_z: permanent <= 6 m_x m_y m_z. For insphere it is bounded by the
+//    lifts L_a..L_d the evaluation computes anyway (see "insphere lift bound" below). Valid while
+//    those products neither underflow nor overflow, which the range checks guarantee;
+//  - otherwise (out of range, or for insphere also when the lift bound cannot decide) the
+//    permanent itself is computed (any finite input).
 // The code requires IEEE double arithmetic without FMA contraction (-ffp-contract=off).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
@@ -37,10 +38,31 @@ std::uint64_t exact_calls();
 inline constexpr double kEps = 0x1p-53;  // unit roundoff of IEEE double
 inline constexpr double kOrient3dBound = (7.0 + 56.0 * kEps) * kEps;
 inline constexpr double kInsphereBound = (16.0 + 224.0 * kEps) * kEps;
-// Semi-static constants: 6 * 7 eps = 4.663e-15 and 72 * 16 eps = 1.279e-13, rounded up by
-// more than 0.5% to absorb the O(eps) rounding of the bound's own products.
+// Semi-static constant of orient3d: 6 * 7 eps = 4.663e-15, rounded up by more than 0.5% to
+// absorb the O(eps) rounding of the bound's own products.
 inline constexpr double kOrient3dStatic = 4.7e-15;
-inline constexpr double kInsphereStatic = 1.3e-13;
+// Insphere lift bound (2026-11-21; replaces 72 M^2 m_x m_y m_z, which cost ~50 instructions of
+// fabs/max per call). Notation: x_i, y_i, z_i the computed differences of row i in {a,b,c,d}
+// (i - e), L_i = fl(x_i^2 + y_i^2 + z_i^2) the computed lift, lambda_i the exact sum of squares,
+// so lambda_i <= L_i (1 + 4 eps). The permanent of insphere_eval<true> is
+//   P = sum_d L_d * sum over the 6 permutations (i,j,k) of the other three rows of
+//       |x_i| |y_j| |z_k|,
+// and |x_i| |y_j| |z_k| <= sqrt(lambda_i lambda_j lambda_k), hence
+//   P <= 6 (1 + 6 eps) sum_d L_d sqrt(prod_{i != d} L_i)
+//      = 6 (1 + 6 eps) sqrt(L_a L_b L_c L_d) sum_d sqrt(L_d)
+//     <= 24 (1 + 6 eps) sqrt(Q),   Q = L_a L_b L_c L_d Lmax,  Lmax = max_i L_i.
+// With |det - fl(det)| <= (16 + 224 eps) eps P, the sign of fl(det) is proven when
+// fl(det)^2 > K^2 Q, K = 24 (16 + 224 eps)(1 + 6 eps) eps = 384 eps (1 + 15 eps) = 4.2633e-14.
+// The code tests fl(fl(det) * fl(det)) > fl(kInsphereLiftStatic * Qf), Qf the computed product
+// ((L_a L_b)(L_c L_d)) Lmax (4 roundings): that test implies
+//   fl(det)^2 >= fl(det^2) / (1 + eps) > kInsphereLiftStatic Q (1 - eps)^5 / (1 + eps),
+// which is >= K^2 Q as kInsphereLiftStatic = 1.83e-27 >= K^2 (1 + 8 eps) = 1.8175e-27 (0.7%
+// margin). Range: Lmin >= 1e-50 and Lmax <= 1e60 keep every product normal: Q in
+// [1e-250, 1e300], kInsphereLiftStatic Q >= 1.8e-277, |fl(det)| <= 1.01 * 24 sqrt(Q), so
+// fl(det)^2 <= 6e302; a subnormal or zero fl(det)^2 cannot pass the test. Outside that range
+// the permanent itself is computed (insphere_permanent). The bound is about as tight as the old
+// one on well-shaped input (sqrt(Q) ~ r^5 against 72 M^5 with r the row norm).
+inline constexpr double kInsphereLiftStatic = 1.83e-27;
 
 /// Out-of-line filters with the permanent as bound: for inputs outside the semi-static range.
 int orient3d_permanent(const double* a, const double* b, const double* c, const double* d);
@@ -61,6 +83,7 @@ struct Eval {
   double det;
   double mx, my, mz;  // largest |difference| per axis (semi-static scale)
   double permanent;   // only with kPermanent
+  double lift_min, lift_max, lift_q;  // insphere_eval<false>: min, max lift, Q (see above)
 };
 
 /// det[b-a, c-a, d-a] in one fixed evaluation order (the one the bounds are derived for).
@@ -129,9 +152,9 @@ inline Eval insphere_eval(const double* a, const double* b, const double* c, con
                   (pab * pdz + pbd * paz + pda * pbz) * clift +
                   (pbc * paz + pac * pbz + pab * pcz) * dlift;
   } else {
-    r.mx = abs_max4(aex, bex, cex, dex);
-    r.my = abs_max4(aey, bey, cey, dey);
-    r.mz = abs_max4(aez, bez, cez, dez);
+    r.lift_max = max2(max2(alift, blift), max2(clift, dlift));
+    r.lift_min = min2(min2(alift, blift), min2(clift, dlift));
+    r.lift_q = ((alift * blift) * (clift * dlift)) * r.lift_max;
   }
   return r;
 }
@@ -154,12 +177,13 @@ inline int insphere(const double* a, const double* b, const double* c, const dou
   using detail::max2;
   using detail::min2;
   const detail::Eval r = detail::insphere_eval<false>(a, b, c, d, e);
-  const double lo = min2(r.mx, min2(r.my, r.mz)), hi = max2(r.mx, max2(r.my, r.mz));
-  if (!(lo >= 1e-58 && hi <= 1e61)) return insphere_permanent(a, b, c, d, e);  // products of 5
-  const double bound = kInsphereStatic * (hi * hi * (r.mx * r.my * r.mz));      // in [1e-290, 1e305]
-  if (r.det > bound) return -1;  // Shewchuk's sign is opposite to kdmesh's convention
-  if (-r.det > bound) return 1;
-  return insphere_exact(a, b, c, d, e);
+  // Lift bound (see kInsphereLiftStatic): proven sign iff det^2 > K'^2 Q, in range.
+  if (!(r.lift_min >= 1e-50 && r.lift_max <= 1e60)) return insphere_permanent(a, b, c, d, e);
+  if (r.det * r.det > kInsphereLiftStatic * r.lift_q)
+    return r.det > 0 ? -1 : 1;  // Shewchuk's sign is opposite to kdmesh's convention
+  // Undecided: the permanent bound is tighter (it follows anisotropic rows, e.g. points near
+  // a line, where sqrt(Q) overestimates), then the exact evaluation.
+  return insphere_permanent(a, b, c, d, e);
 }
 
 /// The tie-break of insphere_perturbed, for e exactly on the sphere (out of line: rare).

@@ -8,6 +8,8 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/internal/Side_of_triangle_mesh/Point_inside_vertical_ray_cast.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -22,9 +24,81 @@ using Primitive = CGAL::AABB_triangle_primitive<K, Triangles::const_iterator>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
 }  // namespace
 
+/// Facet bounding boxes binned on a uniform grid: which facets a small box may touch, with
+/// exact comparisons only (cell indices are a monotone function of a coordinate, so a facet
+/// box and a query box that overlap share a cell).
+class BoxGrid {
+ public:
+  void build(const Triangles& tris) {
+    for (int k = 0; k < 3; ++k) lo_[k] = hi_[k] = tris[0].vertex(0)[k];
+    boxes_.resize(tris.size());
+    for (std::size_t f = 0; f < tris.size(); ++f) {
+      std::array<double, 6>& b = boxes_[f];
+      for (int k = 0; k < 3; ++k) {
+        b[k] = std::min({tris[f].vertex(0)[k], tris[f].vertex(1)[k], tris[f].vertex(2)[k]});
+        b[3 + k] = std::max({tris[f].vertex(0)[k], tris[f].vertex(1)[k], tris[f].vertex(2)[k]});
+        lo_[k] = std::min(lo_[k], b[k]);
+        hi_[k] = std::max(hi_[k], b[3 + k]);
+      }
+    }
+    // About 4 cells per facet, cubic cells, at most 128 per axis.
+    const double ext[3] = {hi_[0] - lo_[0], hi_[1] - lo_[1], hi_[2] - lo_[2]};
+    const double vol = std::max(ext[0], 1e-300) * std::max(ext[1], 1e-300) * std::max(ext[2], 1e-300);
+    const double cell = std::cbrt(vol / (4.0 * double(tris.size())));
+    for (int k = 0; k < 3; ++k) {
+      n_[k] = int(std::clamp(ext[k] / cell, 1.0, 128.0));
+      inv_[k] = ext[k] > 0 ? double(n_[k]) / ext[k] : 0;
+    }
+    std::vector<std::uint32_t> count(std::size_t(n_[0]) * n_[1] * n_[2] + 1, 0);
+    auto each_cell = [&](const double* b, auto&& f) {
+      int a[3], z[3];
+      for (int k = 0; k < 3; ++k) a[k] = index(k, b[k]), z[k] = index(k, b[3 + k]);
+      for (int i = a[0]; i <= z[0]; ++i)
+        for (int j = a[1]; j <= z[1]; ++j)
+          for (int l = a[2]; l <= z[2]; ++l) f((std::size_t(l) * n_[1] + j) * n_[0] + i);
+    };
+    for (const auto& b : boxes_) each_cell(b.data(), [&](std::size_t c) { ++count[c + 1]; });
+    for (std::size_t c = 1; c < count.size(); ++c) count[c] += count[c - 1];
+    start_ = count;
+    items_.resize(count.back());
+    for (std::uint32_t f = 0; f < boxes_.size(); ++f)
+      each_cell(boxes_[f].data(), [&](std::size_t c) { items_[count[c]++] = f; });
+  }
+  /// False when no facet's (closed) box meets the closed box [a, b] (per axis a <= b).
+  bool may_touch(const double* a, const double* b) const {
+    int ia[3], ib[3];
+    for (int k = 0; k < 3; ++k) {
+      if (b[k] < lo_[k] || a[k] > hi_[k]) return false;
+      ia[k] = index(k, a[k]), ib[k] = index(k, b[k]);
+    }
+    for (int i = ia[0]; i <= ib[0]; ++i)
+      for (int j = ia[1]; j <= ib[1]; ++j)
+        for (int l = ia[2]; l <= ib[2]; ++l) {
+          const std::size_t c = (std::size_t(l) * n_[1] + j) * n_[0] + i;
+          for (std::uint32_t x = start_[c]; x < start_[c + 1]; ++x) {
+            const std::array<double, 6>& f = boxes_[items_[x]];
+            if (f[0] <= b[0] && a[0] <= f[3] && f[1] <= b[1] && a[1] <= f[4] && f[2] <= b[2] &&
+                a[2] <= f[5])
+              return true;
+          }
+        }
+    return false;
+  }
+
+ private:
+  int index(int k, double x) const {
+    return std::clamp(int(std::floor((x - lo_[k]) * inv_[k])), 0, n_[k] - 1);
+  }
+  double lo_[3], hi_[3], inv_[3];
+  int n_[3];
+  std::vector<std::array<double, 6>> boxes_;
+  std::vector<std::uint32_t> start_, items_;
+};
+
 struct SurfaceQuery::Impl {
   Triangles triangles;
   Tree tree;
+  BoxGrid boxes;
 };
 
 SurfaceQuery::SurfaceQuery(const SurfaceMesh& surface) : impl_(std::make_unique<Impl>()) {
@@ -41,6 +115,7 @@ SurfaceQuery::SurfaceQuery(const SurfaceMesh& surface) : impl_(std::make_unique<
   impl_->tree.insert(impl_->triangles.cbegin(), impl_->triangles.cend());
   impl_->tree.build();
   impl_->tree.accelerate_distance_queries();
+  impl_->boxes.build(impl_->triangles);
 }
 
 SurfaceQuery::~SurfaceQuery() = default;
@@ -66,6 +141,12 @@ double SurfaceQuery::closest(const double* p, double* out, std::uint32_t* facet)
   out[2] = c.z();
   if (facet) *facet = std::uint32_t(id - impl_->triangles.cbegin());
   return std::sqrt(CGAL::squared_distance(q, c));
+}
+
+bool SurfaceQuery::box_may_touch(const double* a, const double* b) const {
+  double lo[3], hi[3];
+  for (int k = 0; k < 3; ++k) lo[k] = std::min(a[k], b[k]), hi[k] = std::max(a[k], b[k]);
+  return impl_->boxes.may_touch(lo, hi);
 }
 
 double SurfaceQuery::distance(const double* p) const {

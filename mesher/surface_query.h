@@ -24,6 +24,10 @@ class SurfaceQuery {
   double closest(const double* p, double* out, std::uint32_t* facet = nullptr) const;
   /// Distance from p to the surface.
   double distance(const double* p) const;
+  /// False only if no facet's bounding box meets the box spanned by a and b (exact
+  /// comparisons). Then the segment ab does not meet the surface, so a and b lie strictly on
+  /// the same side: a cheap way to carry a known side along a short move.
+  bool box_may_touch(const double* a, const double* b) const;
 
  private:
   struct Impl;

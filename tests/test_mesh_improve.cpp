@@ -12,6 +12,7 @@
 #include <set>
 #include <string>
 
+#include "core/rng.h"
 #include "mesher/improve_flips.h"
 #include "mesher/improve_quality.h"
 #include "mesher/improve_smooth.h"
@@ -115,6 +116,27 @@ TEST(ImproveQuality, SineOfTheRegularTetAndOfASliver) {
   const double expect = std::min(std::sin(q.min_dihedral * kPi / 180), std::sin(q.max_dihedral * kPi / 180));
   // The smallest sine is at one of the extreme angles (sin is concave on [0, 180]).
   EXPECT_NEAR(tet_sine(s1, s2, s3, s4), expect, 1e-9);
+}
+
+TEST(ImproveQuality, SineAndRatioTogetherAreBitIdenticalToEachAlone) {
+  Rng rng(3);
+  int positive = 0;
+  for (int i = 0; i < 2000; ++i) {
+    double p[4][3];
+    for (auto& q : p)
+      for (double& x : q) x = rng.uniform(-1, 1) * (i % 3 ? 1 : 1e-3);  // also tiny tets
+    const SineRatio both = tet_sine_ratio(p[0], p[1], p[2], p[3]);
+    const double sine = tet_sine(p[0], p[1], p[2], p[3]);
+    ASSERT_EQ(both.sine, sine) << i;  // exact equality: the same operations
+    if (sine > 0) {
+      ASSERT_EQ(both.ratio, tet_radius_ratio(p[0], p[1], p[2], p[3])) << i;
+      ++positive;
+    } else {
+      EXPECT_LE(tet_radius_ratio(p[0], p[1], p[2], p[3]), 0);
+      EXPECT_EQ(both.ratio, 0);
+    }
+  }
+  EXPECT_GT(positive, 500);  // about half are positively oriented
 }
 
 // 2-3 flip: the face (a, b, c) in the plane z = 0 between apexes p (z = 1) and q (z = -1)
@@ -416,6 +438,37 @@ std::multiset<std::array<std::uint32_t, 3>> boundary_set(const VolumeMesh& vm) {
 
 // The unit cube, graded towards a corner (sizes 0.0375 .. 0.15): every property the pass
 // promises, on a mesh with slivers.
+// The certificate of ImproveTets::inside_ok_moved (a known-inside centroid carried along a
+// path clear of every facet box) never changes an answer: for moves small and large, some
+// through the surface, it agrees with the full ray-parity test.
+TEST(ImproveTets, InsideOkMovedAgreesWithTheFullTest) {
+  Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.25);
+  ImproveTets m(p.mesh.nodes, p.mesh.tets, p.mesh.tet_region);
+  m.inside_query = p.query.get();
+  Rng rng(11);
+  int checked = 0, rejected = 0;
+  for (std::uint32_t t = 0; t < m.capacity(); ++t) {
+    const std::uint32_t* ids = m.v(t);
+    const double* p0[4] = {m.p(ids[0]), m.p(ids[1]), m.p(ids[2]), m.p(ids[3])};
+    if (!m.inside_ok(ids, p0)) continue;
+    if (t % 2) m.mark_inside(t);  // half certified, half not
+    for (int trial = 0; trial < 4; ++trial) {
+      const int iv = int(rng.below(4));
+      const double step = trial < 2 ? 0.01 : 0.5;
+      double x[3];
+      for (int k = 0; k < 3; ++k) x[k] = p0[iv][k] + rng.uniform(-step, step);
+      const double* p1[4] = {p0[0], p0[1], p0[2], p0[3]};
+      p1[iv] = x;
+      const bool full = m.inside_ok(ids, p1);
+      ASSERT_EQ(m.inside_ok_moved(t, iv, x), full) << "tet " << t;
+      ++checked;
+      rejected += !full;
+    }
+  }
+  EXPECT_GT(checked, 1000);
+  EXPECT_GT(rejected, 10);  // some moves leave the solid
+}
+
 TEST(MeshImprove, GradedCubeKeepsEveryInvariantAndRaisesTheWorstAngle) {
   Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.15, 0.0);
   const VolumeMesh before = p.mesh;
