@@ -95,7 +95,8 @@ class Kernel {
   /// caller's point ids for reports.
   Kernel(const PointSet& points, const std::uint32_t* ids, DelaunayStats& stats)
       : xyz_(points.xyz.data()), ids_(ids), n_(points.size()), stats_(stats), rng_(0x6b646d657368ULL) {
-    v2t_.assign(n_, kNone);
+    // One spare entry at index n_: fill_cavity writes the infinite vertex's "v2t" there.
+    v2t_.assign(n_ + 1, kNone);
     // Delaunay tetrahedralizations have ~6.76 tets per point for uniform points (6.2-6.5 on
     // surfaces). Reserve 7.5: only touched pages become resident, so the reserve costs address
     // space, not memory, while a reallocation would briefly hold two copies (at 5M points a
@@ -305,6 +306,7 @@ class Kernel {
       free_.push_back(c);
     }
     edges_.reset(boundary_.size() * 3 / 2 + 1);
+    const std::uint32_t n32 = std::uint32_t(n_);
     std::uint32_t t = kNone;
     for (const BoundaryFace& b : boundary_) {
       t = new_tet(b.v);
@@ -320,8 +322,10 @@ class Kernel {
           adj_of(other) = 4 * t + j;
         }
       }
-      for (std::uint32_t i = 0; i < 4; ++i)
-        if (i != b.slot && b.v[i] != kInf) v2t_[b.v[i]] = t;
+      // Branch-free: p's own entry is rewritten below with the last t anyway, and the infinite
+      // vertex (kInf > n_) lands in the spare entry v2t_[n_].
+      std::uint32_t* const v2t = v2t_.data();
+      for (std::uint32_t i = 0; i < 4; ++i) v2t[std::min(b.v[i], n32)] = t;
     }
     v2t_[pid] = t;  // every new tet contains p
     last_ = t;

@@ -202,19 +202,36 @@ bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
 }
 
 void ImproveTets::star(std::uint32_t v, std::vector<std::uint32_t>& out) const {
-  // Thread-safe (no shared marks): stars are small, so "seen" is a scan of `out`.
+  // Thread-safe (no shared marks). "Seen" is a small open-addressing set on the stack (a star
+  // has a few dozen tets; a larger one falls back to scanning `out`).
+  constexpr std::uint32_t kSlots = 256, kEmpty = 0xFFFFFFFFu;
+  std::uint32_t seen[kSlots];
+  std::fill(seen, seen + kSlots, kEmpty);
+  auto insert = [&](std::uint32_t u) {  // true if u was not there
+    if (out.size() >= kSlots / 2) {
+      if (std::find(out.begin(), out.end(), u) != out.end()) return false;
+      out.push_back(u);
+      return true;
+    }
+    for (std::uint32_t h = (u * 0x9E3779B1u) >> 24;; h = (h + 1) & (kSlots - 1)) {
+      if (seen[h] == u) return false;
+      if (seen[h] == kEmpty) {
+        seen[h] = u;
+        out.push_back(u);
+        return true;
+      }
+    }
+  };
   out.clear();
   const std::uint32_t t0 = vtet_[v];
   if (t0 == kImproveNone) return;
-  out.push_back(t0);
+  insert(t0);
   for (std::size_t k = 0; k < out.size(); ++k) {
     const std::uint32_t t = out[k];
     for (int i = 0; i < 4; ++i) {
       if (tv_[4 * std::size_t(t) + i] == v) continue;  // the face opposite v does not hold v
       const std::uint32_t r = ta_[4 * std::size_t(t) + i];
-      if (r == kImproveNone) continue;
-      const std::uint32_t u = r >> 2;
-      if (std::find(out.begin(), out.end(), u) == out.end()) out.push_back(u);
+      if (r != kImproveNone) insert(r >> 2);
     }
   }
 }
