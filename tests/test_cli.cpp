@@ -93,6 +93,27 @@ TEST(Cli, CgalKernelAndOrders) {
   EXPECT_NE(bad.err.find("--kernel cgal"), std::string::npos) << bad.err;
 }
 
+// --count on a point file (used for Tables 16-17 on the pipeline's node sets): CGAL, given
+// kdmesh's kd-bfs order and hints, removes exactly the cells kdmesh finds in conflict, since
+// both build the same Delaunay triangulations in the same insertion order.
+TEST(Cli, CgalCountsOnAPointFileMatchTheKernelsConflicts) {
+  const fs::path pts = tmpdir() / "cube-count.xyz";
+  ASSERT_EQ(kdmesh("points --dist cube -n 3000 -q -o " + pts.string()).code, 0);
+  const CliResult cg = kdmesh("delaunay " + pts.string() + " --kernel cgal --order kd-bfs --count --json -q");
+  ASSERT_EQ(cg.code, 0) << cg.err;
+  const CliResult kd = kdmesh("delaunay " + pts.string() + " --order kd-bfs --json -q");
+  ASSERT_EQ(kd.code, 0) << kd.err;
+  const auto c = nlohmann::json::parse(cg.out)["counts"], k = nlohmann::json::parse(kd.out)["counts"];
+  EXPECT_EQ(c["conflicts_per_point"].get<double>(), k["conflicts_per_point"].get<double>());
+  // Location with the same hints: within a few percent (different walks), about 12 per point.
+  EXPECT_NEAR(c["orient_tests_per_point"].get<double>(), k["orient_tests_per_point"].get<double>(),
+              0.1 * k["orient_tests_per_point"].get<double>());
+  EXPECT_GE(c["all_orient_tests_per_point"].get<double>(), c["orient_tests_per_point"].get<double>());
+  const CliResult bad = kdmesh("delaunay " + pts.string() + " --count -q");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("--kernel cgal"), std::string::npos) << bad.err;
+}
+
 TEST(Cli, LatticeCheckPassesWithTies) {
   std::string text;
   for (int i = 0; i < 6; ++i)
