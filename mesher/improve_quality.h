@@ -12,19 +12,23 @@
 
 namespace kdmesh {
 
+namespace improve_detail {
+inline void sub(const double* p, const double* q, double* r) {
+  r[0] = p[0] - q[0], r[1] = p[1] - q[1], r[2] = p[2] - q[2];
+}
+inline void cross(const double* u, const double* w, double* r) {
+  r[0] = u[1] * w[2] - u[2] * w[1], r[1] = u[2] * w[0] - u[0] * w[2], r[2] = u[0] * w[1] - u[1] * w[0];
+}
+inline double len(const double* u) { return std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]); }
+}  // namespace improve_detail
+
 /// min over the six edges of sin(dihedral angle), for the tet (a, b, c, d): in (0, 0.943]
 /// (0.943 = sin 70.5 deg, the regular tet) when positively oriented in floating point, -1
 /// otherwise. sin(theta_ij) = 6V |e_ij| / (|n_k| |n_l|), n_k, n_l the (unnormalised) normals
 /// of the two faces at edge ij. Both min dihedral >= 12 deg and max dihedral <= 165 deg hold
 /// when it is >= sin 15 deg.
 inline double tet_sine(const double* a, const double* b, const double* c, const double* d) {
-  auto sub = [](const double* p, const double* q, double* r) {
-    r[0] = p[0] - q[0], r[1] = p[1] - q[1], r[2] = p[2] - q[2];
-  };
-  auto cross = [](const double* u, const double* w, double* r) {
-    r[0] = u[1] * w[2] - u[2] * w[1], r[1] = u[2] * w[0] - u[0] * w[2], r[2] = u[0] * w[1] - u[1] * w[0];
-  };
-  auto len = [](const double* u) { return std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]); };
+  using improve_detail::cross, improve_detail::len, improve_detail::sub;
   double ab[3], ac[3], ad[3], bc[3], bd[3], cd[3];
   sub(b, a, ab), sub(c, a, ac), sub(d, a, ad), sub(c, b, bc), sub(d, b, bd), sub(d, c, cd);
   double n[3];
@@ -49,13 +53,10 @@ inline double tet_sine(const double* a, const double* b, const double* c, const 
 /// Radius ratio 3 r_in / R_circ (1 regular, 0 flat; <= 0 if not positive in floating point),
 /// without the angles tet_quality also computes.
 inline double tet_radius_ratio(const double* a, const double* b, const double* c, const double* d) {
+  using improve_detail::cross, improve_detail::len;
   const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
   const double e3[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-  auto cross = [](const double* u, const double* w, double* r) {
-    r[0] = u[1] * w[2] - u[2] * w[1], r[1] = u[2] * w[0] - u[0] * w[2], r[2] = u[0] * w[1] - u[1] * w[0];
-  };
-  auto len = [](const double* u) { return std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]); };
   double c23[3], c31[3], c12[3];
   cross(e2, e3, c23), cross(e3, e1, c31), cross(e1, e2, c12);
   const double det = e1[0] * c23[0] + e1[1] * c23[1] + e1[2] * c23[2];  // 6 V
@@ -85,13 +86,7 @@ struct SineRatio {
 };
 inline SineRatio tet_sine_ratio(const double* a, const double* b, const double* c,
                                 const double* d) {
-  auto sub = [](const double* p, const double* q, double* r) {
-    r[0] = p[0] - q[0], r[1] = p[1] - q[1], r[2] = p[2] - q[2];
-  };
-  auto cross = [](const double* u, const double* w, double* r) {
-    r[0] = u[1] * w[2] - u[2] * w[1], r[1] = u[2] * w[0] - u[0] * w[2], r[2] = u[0] * w[1] - u[1] * w[0];
-  };
-  auto len = [](const double* u) { return std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]); };
+  using improve_detail::cross, improve_detail::len, improve_detail::sub;
   double ab[3], ac[3], ad[3], bc[3], bd[3], cd[3];
   sub(b, a, ab), sub(c, a, ac), sub(d, a, ad), sub(c, b, bc), sub(d, b, bd), sub(d, c, cd);
   double nb[3], na[3], nc[3], nd[3];  // normals of the faces opposite b, a, c, d
