@@ -44,7 +44,8 @@ inline constexpr double kOrient3dStatic = 4.7e-15;
 // Insphere lift bound (2026-11-21; replaces 72 M^2 m_x m_y m_z, which cost ~50 instructions of
 // fabs/max per call). Notation: x_i, y_i, z_i the computed differences of row i in {a,b,c,d}
 // (i - e), L_i = fl(x_i^2 + y_i^2 + z_i^2) the computed lift, lambda_i the exact sum of squares,
-// so lambda_i <= L_i (1 + 4 eps). The permanent of insphere_eval<true> is
+// so lambda_i <= L_i (1 + 4 eps) (a square that underflows adds at most 2^-1074, negligible
+// against L_i >= 1e-50, the range below). The permanent of insphere_eval<true> is
 //   P = sum_d L_d * sum over the 6 permutations (i,j,k) of the other three rows of
 //       |x_i| |y_j| |z_k|,
 // and |x_i| |y_j| |z_k| <= sqrt(lambda_i lambda_j lambda_k), hence
@@ -52,11 +53,11 @@ inline constexpr double kOrient3dStatic = 4.7e-15;
 //      = 6 (1 + 6 eps) sqrt(L_a L_b L_c L_d) sum_d sqrt(L_d)
 //     <= 24 (1 + 6 eps) sqrt(Q),   Q = L_a L_b L_c L_d Lmax,  Lmax = max_i L_i.
 // With |det - fl(det)| <= (16 + 224 eps) eps P, the sign of fl(det) is proven when
-// fl(det)^2 > K^2 Q, K = 24 (16 + 224 eps)(1 + 6 eps) eps = 384 eps (1 + 15 eps) = 4.2633e-14.
+// fl(det)^2 > K^2 Q, K = 24 (16 + 224 eps)(1 + 6 eps) eps <= 384 eps (1 + 21 eps) = 4.2633e-14.
 // The code tests fl(fl(det) * fl(det)) > fl(kInsphereLiftStatic * Qf), Qf the computed product
 // ((L_a L_b)(L_c L_d)) Lmax (4 roundings): that test implies
 //   fl(det)^2 >= fl(det^2) / (1 + eps) > kInsphereLiftStatic Q (1 - eps)^5 / (1 + eps),
-// which is >= K^2 Q as kInsphereLiftStatic = 1.83e-27 >= K^2 (1 + 8 eps) = 1.8175e-27 (0.7%
+// which is >= K^2 Q as kInsphereLiftStatic = 1.83e-27 >= K^2 (1 + 7 eps) = 1.8175e-27 (0.7%
 // margin). Range: Lmin >= 1e-50 and Lmax <= 1e60 keep every product normal: Q in
 // [1e-250, 1e300], kInsphereLiftStatic Q >= 1.8e-277, |fl(det)| <= 1.01 * 24 sqrt(Q), so
 // fl(det)^2 <= 6e302; a subnormal or zero fl(det)^2 cannot pass the test. Outside that range
@@ -73,15 +74,13 @@ namespace detail {
 // Plain comparisons compile to maxsd/minsd (std::fmax/fmin carry NaN rules; inputs are finite).
 inline double max2(double x, double y) { return x > y ? x : y; }
 inline double min2(double x, double y) { return x < y ? x : y; }
-inline double abs_max4(double p, double q, double r, double s) {
-  return max2(max2(std::fabs(p), std::fabs(q)), max2(std::fabs(r), std::fabs(s)));
-}
 
-/// A determinant evaluated in floating point with the scale of its error bound: either the
-/// largest coordinate differences (semi-static) or the permanent (kPermanent).
+/// A determinant evaluated in floating point with the scale of its error bound: the largest
+/// coordinate differences (orient3d) or the lifts (insphere) for the semi-static bound, or the
+/// permanent (kPermanent).
 struct Eval {
   double det;
-  double mx, my, mz;  // largest |difference| per axis (semi-static scale)
+  double mx, my, mz;  // orient3d_eval<false>: largest |difference| per axis (semi-static scale)
   double permanent;   // only with kPermanent
   double lift_min, lift_max, lift_q;  // insphere_eval<false>: min, max lift, Q (see above)
 };
@@ -174,10 +173,8 @@ inline int orient3d(const double* a, const double* b, const double* c, const dou
 
 inline int insphere(const double* a, const double* b, const double* c, const double* d,
                     const double* e) {
-  using detail::max2;
-  using detail::min2;
   const detail::Eval r = detail::insphere_eval<false>(a, b, c, d, e);
-  // Lift bound (see kInsphereLiftStatic): proven sign iff det^2 > K'^2 Q, in range.
+  // Lift bound (see kInsphereLiftStatic): the sign is proven if det^2 > kInsphereLiftStatic Q.
   if (!(r.lift_min >= 1e-50 && r.lift_max <= 1e60)) return insphere_permanent(a, b, c, d, e);
   if (r.det * r.det > kInsphereLiftStatic * r.lift_q)
     return r.det > 0 ? -1 : 1;  // Shewchuk's sign is opposite to kdmesh's convention

@@ -156,6 +156,42 @@ TEST(Predicates, AgreeWithExactOracle) {
   EXPECT_GT(pred::exact_calls() - exact_before, 500u);
 }
 
+// The insphere filter's lift bound (predicates.h, kInsphereLiftStatic) on the inputs it is
+// weakest on: scales from 2^-80 to 2^80, rows flattened along y or z (points near a plane or a
+// line, where the lifts overestimate the permanent), points on a common sphere, e a rounding
+// step away from a vertex, and exact ties on a grid. Every sign must equal the oracle's.
+TEST(Predicates, InsphereFilterAgreesWithOracleAcrossScalesAndShapes) {
+  Rng rng(13);
+  for (int iter = 0; iter < 20000; ++iter) {
+    const double s = std::ldexp(1.0, int(rng.below(161)) - 80);
+    const double sy = s * (rng.below(4) == 0 ? 1e-9 : 1), sz = s * (rng.below(8) == 0 ? 1e-12 : 1);
+    P3 p[5];
+    for (int i = 0; i < 5; ++i) p[i] = {rng.uniform(-1, 1) * s, rng.uniform(-1, 1) * sy, rng.uniform(-1, 1) * sz};
+    switch (iter % 4) {
+      case 0:  // e one rounding step from a: |det| tiny, far below the filter's reach
+        p[4] = p[0];
+        p[4][0] = std::nextafter(p[4][0], 1e300);
+        break;
+      case 1:  // all five near one sphere of radius s
+        for (auto& q : p) {
+          const double a = rng.uniform(-3.14159, 3.14159), b = rng.uniform(-1.5, 1.5);
+          q = {s * std::cos(a) * std::cos(b), s * std::sin(a) * std::cos(b), s * std::sin(b)};
+        }
+        break;
+      case 2:  // exact ties
+        for (auto& q : p)
+          for (double& x : q) x = double(rng.below(3)) * s;
+        break;
+      default:  // e near the origin of the row differences
+        for (int k = 0; k < 3; ++k) p[4][k] *= 1e-3;
+    }
+    if (pred::orient3d(p[0].data(), p[1].data(), p[2].data(), p[3].data()) < 0) std::swap(p[0], p[1]);
+    ASSERT_EQ(pred::insphere(p[0].data(), p[1].data(), p[2].data(), p[3].data(), p[4].data()),
+              oracle_insphere(p[0], p[1], p[2], p[3], p[4]))
+        << "iter " << iter;
+  }
+}
+
 TEST(Predicates, ExtremeScalesUseExactArithmetic) {
   // Coordinates spanning 1e-200 .. 1e200 in one call: products underflow/overflow the filter.
   const P3 a{1e-200, 0, 0}, b{0, 1e-200, 0}, c{0, 0, 1e-200}, d{1e-200, 1e-200, 1e-200};
