@@ -8,13 +8,20 @@
 // the perturbed insphere test; the star of the new point is built over the cavity boundary;
 // new tets take the cavity's slots first (then the free list, then the end of the array), so
 // the steady state allocates nothing.
+// Parallel insertion (DelaunayOptions::threads > 1): after a sequential prefix, rounds in which
+// each worker inserts the points of its own slab and may touch only the tets whose four
+// vertices lie in that slab (insert_in_rounds below); the result is the same triangulation.
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "mesher/delaunay.h"
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
+#include <exception>
+#include <memory>
 #include <string>
+#include <thread>
 
 #include "core/error.h"
 #include "core/rng.h"
@@ -89,36 +96,52 @@ struct BoundaryFace {
   std::uint32_t outer;             // face reference 4*u+j of the tet outside the cavity
 };
 
+/// The triangulation under construction, shared by the kernel's workers (one when sequential).
+struct Store {
+  const double* xyz = nullptr;     // coordinates in the kernel's numbering
+  std::size_t n = 0;               // points
+  std::vector<std::uint32_t> T;    // tet records, 8 per tet
+  std::vector<std::uint8_t> state;  // per tet: mark of the current cavity search
+  std::vector<std::uint32_t> v2t;  // per vertex: a tet that contains it; entries >= n are spares
+
+  const double* P(std::uint32_t v) const { return xyz + 3 * std::size_t(v); }
+  std::size_t num_tets() const { return T.size() / 8; }
+  void add_slots(std::size_t count) {
+    T.resize(T.size() + 8 * count, kNone);
+    state.resize(T.size() / 8, kUnvisited);
+  }
+};
+
+/// dir . x, always evaluated the same way, so that a point's slab never depends on who asks.
+inline double along(const std::array<double, 3>& dir, const double* x) {
+  return dir[0] * x[0] + dir[1] * x[1] + dir[2] * x[2];
+}
+
+/// What a worker of a parallel round may touch. It owns the vertices in its slab between two
+/// parallel planes (the infinite vertex belongs to every slab) and may read or write a tet
+/// only if it owns all four of its vertices. Two workers then never touch the same tet: the
+/// tets they read across a face of an owned tet share three owned vertices, so no other worker
+/// owns more than two of theirs (counting the infinite vertex for both). New tets come from the worker's free list, then from its own
+/// slot range [next, end) of the tet array.
+struct Territory {
+  std::array<double, 3> dir{};  // owns the points x with lo <= dir . x < hi
+  double lo = 0, hi = 0;        // (either may be infinite)
+  std::uint32_t next = 0, end = 0;
+};
+
+/// One inserting thread. `kParallel` workers respect a Territory: a point whose walk or cavity
+/// reaches a tet they do not own is not inserted (insert() returns false; nothing changed) and
+/// goes to a later round. The sequential instantiation compiles those checks away.
+template <bool kParallel>
 class Kernel {
  public:
-  /// `points` are in the kernel's numbering (see delaunay()); `ids` maps it back to the
-  /// caller's point ids for reports.
-  Kernel(const PointSet& points, const std::uint32_t* ids, DelaunayStats& stats)
-      : xyz_(points.xyz.data()), ids_(ids), n_(points.size()), stats_(stats), rng_(0x6b646d657368ULL) {
-    // One spare entry at index n_: fill_cavity writes the infinite vertex's "v2t" there.
-    v2t_.assign(n_ + 1, kNone);
-    // Delaunay tetrahedralizations have ~6.76 tets per point for uniform points (6.2-6.5 on
-    // surfaces). Reserve 7.5: only touched pages become resident, so the reserve costs address
-    // space, not memory, while a reallocation would briefly hold two copies (at 5M points a
-    // reserve of 6.75 was exceeded by 0.1% and the peak went from ~290 to ~495 bytes/point).
-    const std::size_t expect = n_ * 15 / 2 + 64;
-    T_.reserve(8 * expect);
-    state_.reserve(expect);
-  }
+  /// `ids` maps the kernel's numbering back to the caller's point ids for reports; `spare` is
+  /// the v2t entry this worker writes for the infinite vertex (>= n, one per worker).
+  Kernel(Store& s, const std::uint32_t* ids, DelaunayStats& stats, std::uint64_t seed,
+         std::uint32_t spare)
+      : s_(s), ids_(ids), spare_(spare), stats_(stats), rng_(seed) {}
 
-  /// Takes over an existing triangulation whose vertex ids index `points` directly (ids_ must
-  /// then be the identity), to insert more points into it.
-  void adopt(Triangulation&& tri, std::size_t extra_points) {
-    T_ = std::move(tri.data);
-    T_.reserve(T_.size() + 8 * (extra_points * 15 / 2 + 64));
-    state_.assign(T_.size() / 8, kUnvisited);
-    for (std::size_t t = 0; t < T_.size() / 8; ++t)
-      for (int i = 0; i < 4; ++i)
-        if (T_[8 * t + i] != kInf) v2t_[T_[8 * t + i]] = std::uint32_t(t);
-    last_ = 0;
-  }
-
-  const double* P(std::uint32_t v) const { return xyz_ + 3 * std::size_t(v); }
+  const double* P(std::uint32_t v) const { return s_.P(v); }
 
   /// Creates the first tet from 4 non-coplanar points and closes it with 4 infinite tets.
   void init(std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
@@ -139,21 +162,21 @@ class Kernel {
             if (u != t && same_face(t, f, u, g)) adj(t, f) = 4 * u + g;
     for (std::uint32_t t = 0; t < 5; ++t)
       for (int i = 0; i < 4; ++i)
-        if (vert(t, i) != kInf) v2t_[vert(t, i)] = t;
+        if (vert(t, i) != kInf) s_.v2t[vert(t, i)] = t;
     last_ = 0;
     stats_.inserted = 4;
   }
 
-  /// Inserts point `pid`, starting the search at the tet of `hint` (a point id).
-  void insert(std::uint32_t pid, std::uint32_t hint) {
+  /// Inserts point `pid`, starting the search at the tet of `hint` (a point id). A parallel
+  /// worker returns false, having changed nothing, when the point needs a tet it does not own.
+  bool insert(std::uint32_t pid, std::uint32_t hint) {
     const double* p = P(pid);
-    std::uint32_t start = last_;
-    if (hint != kNone && hint < n_) {
-      std::uint32_t h = v2t_[hint];
-      if (h != kNone && (h & kAliasBit)) h = v2t_[h & ~kAliasBit];
-      if (h != kNone) start = h;
-    }
+    const std::uint32_t start = start_tet(hint);
+    if constexpr (kParallel)
+      if (start == kNone) return false;
     const std::uint32_t base = locate(p, start);
+    if constexpr (kParallel)
+      if (base == kNone) return false;
     if (!is_infinite(base)) {
       for (int i = 0; i < 4; ++i) {
         const std::uint32_t w = vert(base, i);
@@ -161,36 +184,75 @@ class Kernel {
         if (q[0] == p[0] && q[1] == p[1] && q[2] == p[2]) {
           stats_.duplicates.push_back(ids_[pid]);
           stats_.duplicate_of.push_back(ids_[w]);
-          v2t_[pid] = kAliasBit | w;
-          return;
+          s_.v2t[pid] = kAliasBit | w;
+          return true;
         }
       }
     }
-    grow_cavity(base, p);
+    if (!grow_cavity(base, p)) return false;
     fill_cavity(pid);
     ++stats_.inserted;
+    return true;
   }
 
-  /// Moves the (compacted) records out, with vertices renumbered to the caller's ids.
-  Triangulation release() {
-    compact();
-    for (std::size_t t = 0; t < T_.size(); t += 8)
-      for (std::size_t i = t; i < t + 4; ++i)
-        if (T_[i] != kInf) T_[i] = ids_[T_[i]];
-    Triangulation tri;
-    tri.data = std::move(T_);
-    return tri;
+  /// Parallel rounds: the worker's territory for the next round (its last tet may be gone).
+  void enter(const Territory& t) {
+    terr_ = t;
+    last_ = kNone;
   }
+  /// Ends a round: unused slots of the territory's range join the free list.
+  void leave() {
+    for (std::uint32_t t = terr_.next; t < terr_.end; ++t) {
+      vert(t, 0) = kDead;
+      free_.push_back(t);
+    }
+    terr_.next = terr_.end;
+  }
+  std::vector<std::uint32_t>& free_list() { return free_; }
+  void set_last(std::uint32_t t) { last_ = t; }
+  std::uint32_t last() const { return last_; }
 
  private:
-  std::uint32_t& vert(std::uint32_t t, int i) { return T_[8 * std::size_t(t) + i]; }
-  std::uint32_t& adj(std::uint32_t t, int i) { return T_[8 * std::size_t(t) + 4 + i]; }
+  std::uint32_t& vert(std::uint32_t t, int i) { return s_.T[8 * std::size_t(t) + i]; }
+  std::uint32_t& adj(std::uint32_t t, int i) { return s_.T[8 * std::size_t(t) + 4 + i]; }
   /// The adjacency slot addressed by face reference f = 4*t+i.
-  std::uint32_t& adj_of(std::uint32_t f) { return T_[8 * std::size_t(f >> 2) + 4 + (f & 3)]; }
+  std::uint32_t& adj_of(std::uint32_t f) { return s_.T[8 * std::size_t(f >> 2) + 4 + (f & 3)]; }
 
   bool is_infinite(std::uint32_t t) const {
-    const std::uint32_t* v = &T_[8 * std::size_t(t)];
+    const std::uint32_t* v = &s_.T[8 * std::size_t(t)];
     return v[0] == kInf || v[1] == kInf || v[2] == kInf || v[3] == kInf;
+  }
+
+  bool owns_vertex(std::uint32_t v) const {
+    if (v == kInf) return true;
+    const double x = along(terr_.dir, P(v));
+    return x >= terr_.lo && x < terr_.hi;
+  }
+  bool owns_tet(std::uint32_t t) const {
+    const std::uint32_t* v = &s_.T[8 * std::size_t(t)];
+    return owns_vertex(v[0]) && owns_vertex(v[1]) && owns_vertex(v[2]) && owns_vertex(v[3]);
+  }
+
+  /// The tet to start locating from: one of the hint's tets, else (no hint) the last new tet.
+  /// A parallel worker gives kNone, so that the point waits for a later round, when the hint
+  /// is outside its territory, not inserted yet (deferred itself), or on a tet it does not
+  /// own: the point is then near a slab boundary too, and walking from farther away would
+  /// cost many orientation tests only to be deferred after all.
+  std::uint32_t start_tet(std::uint32_t hint) const {
+    if constexpr (kParallel) {
+      if (hint == kNone) return last_;
+      if (!owns_vertex(hint)) return kNone;
+      std::uint32_t h = s_.v2t[hint];
+      if (h != kNone && (h & kAliasBit)) h = s_.v2t[h & ~kAliasBit];
+      return h != kNone && owns_tet(h) ? h : kNone;
+    } else {
+      if (hint != kNone && hint < s_.n) {
+        std::uint32_t h = s_.v2t[hint];
+        if (h != kNone && (h & kAliasBit)) h = s_.v2t[h & ~kAliasBit];
+        if (h != kNone) return h;
+      }
+      return last_;
+    }
   }
 
   bool same_face(std::uint32_t t, std::uint32_t f, std::uint32_t u, std::uint32_t g) {
@@ -209,29 +271,33 @@ class Kernel {
     if (!free_.empty()) {
       t = free_.back();
       free_.pop_back();
+    } else if constexpr (kParallel) {
+      t = terr_.next++;  // room checked in grow_cavity()
     } else {
-      t = std::uint32_t(T_.size() / 8);
-      T_.resize(T_.size() + 8, kNone);
-      state_.push_back(kUnvisited);
+      t = std::uint32_t(s_.num_tets());
+      s_.add_slots(1);
     }
-    std::copy(v.begin(), v.end(), T_.begin() + 8 * std::size_t(t));
+    std::copy(v.begin(), v.end(), s_.T.begin() + 8 * std::size_t(t));
     return t;
   }
 
   /// Visibility walk: from `t`, cross any face that separates t from p, until p is in the
   /// closed tet (finite result) or beyond a hull face (infinite result, in conflict with p).
   /// The first face tried is random, which makes the walk terminate on any triangulation.
+  /// A parallel worker returns kNone when the walk would enter a tet it does not own.
   std::uint32_t locate(const double* p, std::uint32_t t) {
     if (is_infinite(t)) {
       int i = 0;
       while (vert(t, i) != kInf) ++i;
       t = adj(t, i) >> 2;  // the finite tet behind the hull face
+      if constexpr (kParallel)
+        if (!owns_tet(t)) return kNone;
     }
     std::uint32_t prev = kNone;
-    const std::size_t limit = 16 + T_.size() / 2;
+    const std::size_t limit = 16 + s_.T.size() / 2;
     for (std::size_t steps = 0; steps < limit; ++steps) {
       const std::uint32_t r = std::uint32_t(rng_.next() >> 62);
-      const std::uint32_t* rec = &T_[8 * std::size_t(t)];
+      const std::uint32_t* rec = &s_.T[8 * std::size_t(t)];
       const double* q[4] = {P(rec[0]), P(rec[1]), P(rec[2]), P(rec[3])};
       std::uint32_t next = kNone;
       for (std::uint32_t j = 0; j < 4; ++j) {
@@ -249,6 +315,8 @@ class Kernel {
         }
       }
       if (next == kNone) return t;
+      if constexpr (kParallel)
+        if (!owns_tet(next)) return kNone;
       prev = t;
       t = next;
       if (is_infinite(t)) return t;
@@ -257,31 +325,49 @@ class Kernel {
   }
 
   bool in_conflict(std::uint32_t n, const double* p) const {
-    const std::uint32_t* v = &T_[8 * std::size_t(n)];
-    if ((v[0] | v[1] | v[2] | v[3]) == kInf) return tet_in_conflict(xyz_, T_.data(), n, p);
+    const std::uint32_t* v = &s_.T[8 * std::size_t(n)];
+    if ((v[0] | v[1] | v[2] | v[3]) == kInf) return tet_in_conflict(s_.xyz, s_.T.data(), n, p);
     return pred::insphere_perturbed(P(v[0]), P(v[1]), P(v[2]), P(v[3]), p) > 0;
   }
 
-  void grow_cavity(std::uint32_t base, const double* p) {
+  /// Collects the tets in conflict with p, breadth-first from `base`. A parallel worker gives
+  /// up (false, marks cleared) on a conflicting tet it does not own, or when its slot range
+  /// cannot hold the new tets.
+  bool grow_cavity(std::uint32_t base, const double* p) {
+    std::uint8_t* const state = s_.state.data();
     cavity_.clear();
     touched_.clear();
     cavity_.push_back(base);
-    state_[base] = kInCavity;
+    state[base] = kInCavity;
     for (std::size_t i = 0; i < cavity_.size(); ++i) {
       const std::uint32_t c = cavity_[i];
       for (int f = 0; f < 4; ++f) {
         const std::uint32_t n = adj(c, f) >> 2;
-        if (state_[n] != kUnvisited) continue;
+        if (state[n] != kUnvisited) continue;
         if (in_conflict(n, p)) {
-          state_[n] = kInCavity;
+          if constexpr (kParallel)
+            if (!owns_tet(n)) return abandon_cavity();
+          state[n] = kInCavity;
           cavity_.push_back(n);
         } else {
-          state_[n] = kOutside;
+          state[n] = kOutside;
           touched_.push_back(n);
         }
       }
     }
+    if constexpr (kParallel) {
+      // A cavity of k tets (a ball) has at most 2k + 2 boundary faces, one new tet each; k of
+      // them reuse the cavity's slots.
+      if (cavity_.size() + 2 > free_.size() + (terr_.end - terr_.next)) return abandon_cavity();
+    }
     stats_.conflicts += cavity_.size();
+    return true;
+  }
+
+  bool abandon_cavity() {
+    for (std::uint32_t t : cavity_) s_.state[t] = kUnvisited;
+    for (std::uint32_t t : touched_) s_.state[t] = kUnvisited;
+    return false;
   }
 
   void fill_cavity(std::uint32_t pid) {
@@ -290,23 +376,22 @@ class Kernel {
     for (std::uint32_t c : cavity_)
       for (std::uint32_t f = 0; f < 4; ++f) {
         const std::uint32_t outer = adj(c, f);
-        if (state_[outer >> 2] == kInCavity) continue;
+        if (s_.state[outer >> 2] == kInCavity) continue;
         BoundaryFace b;
-        std::memcpy(b.v.data(), &T_[8 * std::size_t(c)], sizeof(b.v));
+        std::memcpy(b.v.data(), &s_.T[8 * std::size_t(c)], sizeof(b.v));
         b.v[f] = pid;
         b.slot = f;
         b.outer = outer;
         boundary_.push_back(b);
       }
-    for (std::uint32_t t : touched_) state_[t] = kUnvisited;
+    for (std::uint32_t t : touched_) s_.state[t] = kUnvisited;
     // 2. Dead cavity tets become free slots; new tets take them first.
     for (std::uint32_t c : cavity_) {
-      state_[c] = kUnvisited;
+      s_.state[c] = kUnvisited;
       vert(c, 0) = kDead;
       free_.push_back(c);
     }
     edges_.reset(boundary_.size() * 3 / 2 + 1);
-    const std::uint32_t n32 = std::uint32_t(n_);
     std::uint32_t t = kNone;
     for (const BoundaryFace& b : boundary_) {
       t = new_tet(b.v);
@@ -323,49 +408,255 @@ class Kernel {
         }
       }
       // Branch-free: p's own entry is rewritten below with the last t anyway, and the infinite
-      // vertex (kInf > n_) lands in the spare entry v2t_[n_].
-      std::uint32_t* const v2t = v2t_.data();
-      for (std::uint32_t i = 0; i < 4; ++i) v2t[std::min(b.v[i], n32)] = t;
+      // vertex (kInf > every id) lands in this worker's spare entry.
+      std::uint32_t* const v2t = s_.v2t.data();
+      for (std::uint32_t i = 0; i < 4; ++i) v2t[std::min(b.v[i], spare_)] = t;
     }
-    v2t_[pid] = t;  // every new tet contains p
+    s_.v2t[pid] = t;  // every new tet contains p
     last_ = t;
   }
 
-  /// Removes free-list holes so that every tet in the array is alive.
-  void compact() {
-    if (free_.empty()) return;
-    const std::size_t m = T_.size() / 8;
-    std::vector<std::uint32_t> remap(m, kNone);
-    std::uint32_t next = 0;
-    for (std::size_t t = 0; t < m; ++t)
-      if (T_[8 * t] != kDead) remap[t] = next++;
-    for (std::size_t t = 0; t < m; ++t) {
-      if (remap[t] == kNone) continue;
-      const std::size_t d = 8 * std::size_t(remap[t]);
-      for (int i = 0; i < 4; ++i) {
-        T_[d + i] = T_[8 * t + i];
-        const std::uint32_t a = T_[8 * t + 4 + i];
-        T_[d + 4 + i] = 4 * remap[a >> 2] + (a & 3);
-      }
-    }
-    T_.resize(8 * std::size_t(next));
-    free_.clear();
-  }
-
-  const double* xyz_;
+  Store& s_;
   const std::uint32_t* ids_;
-  std::size_t n_;
+  std::uint32_t spare_;
   DelaunayStats& stats_;
   Rng rng_;
-  std::vector<std::uint32_t> T_;  // tet records, 8 per tet
-  std::vector<std::uint8_t> state_;
-  std::vector<std::uint32_t> v2t_;
+  Territory terr_;
   std::vector<std::uint32_t> free_;
   std::vector<std::uint32_t> cavity_, touched_;
   std::vector<BoundaryFace> boundary_;
   EdgeMap edges_;
   std::uint32_t last_ = 0;
 };
+
+/// Removes free-list holes so that every tet in the array is alive.
+void compact(Store& s) {
+  std::vector<std::uint32_t>& T = s.T;
+  const std::size_t m = T.size() / 8;
+  std::vector<std::uint32_t> remap(m, kNone);
+  std::uint32_t next = 0;
+  for (std::size_t t = 0; t < m; ++t)
+    if (T[8 * t] != kDead) remap[t] = next++;
+  if (next == m) return;
+  for (std::size_t t = 0; t < m; ++t) {
+    if (remap[t] == kNone) continue;
+    const std::size_t d = 8 * std::size_t(remap[t]);
+    for (int i = 0; i < 4; ++i) {
+      T[d + i] = T[8 * t + i];
+      const std::uint32_t a = T[8 * t + 4 + i];
+      T[d + 4 + i] = 4 * remap[a >> 2] + (a & 3);
+    }
+  }
+  T.resize(8 * std::size_t(next));
+}
+
+/// Moves the (compacted) records out, with vertices renumbered to the caller's ids.
+Triangulation release(Store& s, const std::uint32_t* ids) {
+  compact(s);
+  for (std::size_t i = 0; i < s.T.size(); i += 8)
+    for (std::size_t k = i; k < i + 4; ++k)
+      if (s.T[k] != kInf) s.T[k] = ids[s.T[k]];
+  Triangulation tri;
+  tri.data = std::move(s.T);
+  return tri;
+}
+
+constexpr std::uint64_t kWalkSeed = 0x6b646d657368ULL;
+
+/// Points below this many go to the sequential kernel: parallel rounds would not pay.
+constexpr std::size_t kMinParallel = 20000;
+/// Each parallel round takes the next points of the order up to this many times the points
+/// already in, so that the tets straddling slab boundaries are small compared with the domain
+/// (1M cube points: 45.5k deferrals with 2, 62.9k with 4).
+constexpr std::size_t kRoundGrowth = 2;
+
+/// Inserts ranks [first, n) on `threads` workers in rounds. Round r takes the points deferred
+/// so far and the next chunk of the order, and cuts them into slabs of equal count across one
+/// direction (the axes in turn, longest extent first, or a diagonal where coordinates tie);
+/// each worker inserts its slab's points in order and defers those that need a tet it does not
+/// own. Deferred points are near a slab boundary, which the next round moves to another
+/// direction. Returns the points still left when
+/// rounds stop paying; `seq` inserts them. `up[r]` is the hint of rank r. Deterministic:
+/// within a round the tets that straddle a slab boundary cannot change, so each worker's work
+/// does not depend on the others' timing.
+/// Slab directions of the parallel rounds: the axes (sorted longest extent first by
+/// slab_directions()), then the four diagonals, for point sets whose coordinates tie, e.g.
+/// points along the coordinate axes.
+using Direction = std::array<double, 3>;
+using Directions = std::array<Direction, 7>;
+
+Directions slab_directions(const Store& s, std::size_t first) {
+  Directions dirs = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}, {1, 1, -1}, {1, -1, 1}, {-1, 1, 1}}};
+  std::array<double, 3> lo, hi;
+  lo.fill(HUGE_VAL);
+  hi.fill(-HUGE_VAL);
+  for (std::size_t r = first; r < s.n; ++r)
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], s.P(std::uint32_t(r))[a]);
+      hi[a] = std::max(hi[a], s.P(std::uint32_t(r))[a]);
+    }
+  auto extent = [&](const Direction& d) { return along(d, hi.data()) - along(d, lo.data()); };
+  std::sort(dirs.begin(), dirs.begin() + 3, [&](const auto& a, const auto& b) { return extent(a) > extent(b); });
+  return dirs;
+}
+
+/// Picks the direction of a round's slabs, other than `last`: the one whose cuts fall where the
+/// points are sparsest, i.e. with the widest band between the quantiles 5% either side of each
+/// cut (judged on a sample of at most ~20k points). On points along the coordinate axes, an
+/// axis cut would run along two of them; a diagonal cuts all three across.
+std::size_t pick_direction(const Store& s, const std::vector<std::uint32_t>& todo,
+                           const Directions& dirs, std::size_t last, unsigned threads) {
+  const std::size_t stride = todo.size() / 20000 + 1;
+  std::vector<double> key;
+  double best_width = -1;
+  std::size_t best = 0;
+  for (std::size_t cand = 0; cand < dirs.size(); ++cand) {
+    if (cand == last) continue;
+    key.clear();
+    for (std::size_t i = 0; i < todo.size(); i += stride) key.push_back(along(dirs[cand], s.P(todo[i])));
+    auto quantile = [&](double q) {
+      const std::size_t k = std::min(key.size() - 1, std::size_t(std::max(0.0, q) * double(key.size())));
+      std::nth_element(key.begin(), key.begin() + std::ptrdiff_t(k), key.end());
+      return key[k];
+    };
+    double width = HUGE_VAL;
+    for (unsigned w = 1; w < threads; ++w) {
+      const double q = double(w) / threads;
+      width = std::min(width, quantile(q + 0.05) - quantile(q - 0.05));
+    }
+    width /= std::sqrt(along(dirs[cand], dirs[cand].data()));
+    if (width > best_width) {
+      best_width = width;
+      best = cand;
+    }
+  }
+  return best;
+}
+
+/// Cuts of `threads` slabs of equal count across `dir`: cuts[0] = -inf < cuts[1] <= ... <
+/// cuts[threads] = +inf; slab w holds the points with cuts[w] <= dir . x < cuts[w + 1].
+std::vector<double> slab_cuts(const Store& s, const std::vector<std::uint32_t>& todo, const Direction& dir,
+                              unsigned threads) {
+  std::vector<double> key(todo.size());
+  for (std::size_t i = 0; i < todo.size(); ++i) key[i] = along(dir, s.P(todo[i]));
+  std::vector<double> cuts(threads + 1, -HUGE_VAL);
+  cuts[threads] = HUGE_VAL;
+  for (unsigned w = 1; w < threads; ++w) {
+    auto mid = key.begin() + std::ptrdiff_t(todo.size() * w / threads);
+    std::nth_element(key.begin(), mid, key.end());
+    cuts[w] = *mid;
+  }
+  std::sort(cuts.begin(), cuts.end());
+  return cuts;
+}
+
+/// Runs work(w) for w in [0, threads) on `threads` threads (w = 0 on the caller's) and
+/// rethrows the first exception.
+template <class Work>
+void run_workers(unsigned threads, const Work& work) {
+  std::vector<std::thread> pool;
+  std::vector<std::exception_ptr> errors(threads);
+  for (unsigned w = 1; w < threads; ++w)
+    pool.emplace_back([&, w] {
+      try {
+        work(w);
+      } catch (...) {
+        errors[w] = std::current_exception();
+      }
+    });
+  try {
+    work(0);
+  } catch (...) {
+    errors[0] = std::current_exception();
+  }
+  for (std::thread& t : pool) t.join();
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);
+}
+
+template <class Report>
+std::vector<std::uint32_t> insert_in_rounds(Store& s, Kernel<false>& seq, std::size_t first,
+                                            const std::uint32_t* up, const std::uint32_t* ids,
+                                            unsigned threads, DelaunayStats& st, const Report& report) {
+  const std::size_t n = s.n;
+  const Directions dirs = slab_directions(s, first);
+  std::vector<DelaunayStats> wstats(threads);
+  std::vector<std::unique_ptr<Kernel<true>>> workers;
+  for (unsigned w = 0; w < threads; ++w)
+    workers.push_back(std::make_unique<Kernel<true>>(s, ids, wstats[w], kWalkSeed + 1 + w,
+                                                      std::uint32_t(n + w)));
+  workers[0]->free_list().swap(seq.free_list());
+  std::vector<std::uint64_t> exact(threads, 0);
+  std::vector<std::vector<std::uint32_t>> mine(threads), deferred(threads);
+  std::vector<std::uint32_t> todo;
+  std::size_t next = first;  // the first rank not yet given to a round
+  std::size_t last_dir = dirs.size();  // none yet
+  for (int round = 0;; ++round) {
+    const std::size_t end = next == n ? n : std::min(n, std::max(next + kMinParallel, next * kRoundGrowth));
+    for (std::size_t r = next; r < end; ++r) todo.push_back(std::uint32_t(r));
+    next = end;
+    if (next == n && todo.size() < kMinParallel) break;
+    // Slabs of equal count, across a direction other than the last round's.
+    last_dir = pick_direction(s, todo, dirs, last_dir, threads);
+    const Direction& dir = dirs[last_dir];
+    const std::vector<double> cuts = slab_cuts(s, todo, dir, threads);
+    for (auto& m : mine) m.clear();
+    for (std::uint32_t r : todo) {
+      const double x = along(dir, s.P(r));
+      const unsigned w = unsigned(std::upper_bound(cuts.begin() + 1, cuts.end() - 1, x) - cuts.begin() - 1);
+      mine[w].push_back(r);
+    }
+    // Fresh slots: ~6.7 new tets per point on average, less the free slots the worker holds
+    // (from earlier rounds); a worker that runs out defers the rest of its points.
+    std::vector<Territory> terr(threads);
+    std::size_t base = s.num_tets(), total = 0;
+    for (unsigned w = 0; w < threads; ++w) {
+      const std::size_t want = mine[w].size() * 7, held = workers[w]->free_list().size();
+      const std::size_t slots = (want > held ? want - held : 0) + 1024;
+      terr[w] = Territory{dir, cuts[w], cuts[w + 1], std::uint32_t(base + total),
+                          std::uint32_t(base + total + slots)};
+      total += slots;
+    }
+    if ((base + total) * 4 >= (std::size_t(1) << 32))
+      throw ResourceError("delaunay: too many tets for 32-bit face references");
+    s.add_slots(total);
+    auto work = [&](unsigned w) {
+      const std::uint64_t exact0 = pred::exact_calls();
+      Kernel<true>& k = *workers[w];
+      k.enter(terr[w]);
+      deferred[w].clear();
+      for (std::uint32_t r : mine[w])
+        if (!k.insert(r, up[r])) deferred[w].push_back(r);
+      k.leave();
+      exact[w] += pred::exact_calls() - exact0;
+    };
+    run_workers(threads, work);
+    const std::size_t before = todo.size();
+    todo.clear();
+    for (const auto& d : deferred) todo.insert(todo.end(), d.begin(), d.end());
+    std::sort(todo.begin(), todo.end());
+    report(before - todo.size());
+    ++st.parallel_rounds;
+    st.deferrals += todo.size();
+    if (todo.size() * 2 > before) break;  // most points straddle slabs: rounds do not pay
+  }
+  for (std::size_t r = next; r < n; ++r) todo.push_back(std::uint32_t(r));
+  // Hand the free slots back to the sequential kernel, which resumes from a live tet.
+  std::vector<std::uint32_t>& free = seq.free_list();
+  for (unsigned w = 0; w < threads; ++w) {
+    std::vector<std::uint32_t>& f = workers[w]->free_list();
+    free.insert(free.end(), f.begin(), f.end());
+    st.inserted += wstats[w].inserted;
+    st.orient_tests += wstats[w].orient_tests;
+    st.conflicts += wstats[w].conflicts;
+    st.duplicates.insert(st.duplicates.end(), wstats[w].duplicates.begin(), wstats[w].duplicates.end());
+    st.duplicate_of.insert(st.duplicate_of.end(), wstats[w].duplicate_of.begin(),
+                           wstats[w].duplicate_of.end());
+    if (w > 0) st.exact_fallbacks += exact[w];
+  }
+  seq.set_last(s.v2t[0]);
+  return todo;
+}
 
 void validate_order(const PointSet& points, const Ordering& order) {
   const std::size_t n = points.size();
@@ -442,25 +733,56 @@ DelaunayResult delaunay(const PointSet& points, const Ordering& order,
                         " points are coplanar; no tetrahedralization exists");
   const std::uint32_t d = std::uint32_t(k++);
 
-  Kernel kernel(ranked, ids.data(), st);
+  const unsigned threads =
+      options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  Store s;
+  s.xyz = ranked.xyz.data();
+  s.n = n;
+  // One spare v2t entry per worker at n, n+1, ...: fill_cavity writes the infinite vertex's
+  // "v2t" there.
+  s.v2t.assign(n + threads, kNone);
+  // Delaunay tetrahedralizations have ~6.76 tets per point for uniform points (6.2-6.5 on
+  // surfaces). Reserve 7.5 (8.5 with parallel rounds, whose slot ranges leave gaps): only
+  // touched pages become resident, so the reserve costs address space, not memory, while a
+  // reallocation would briefly hold two copies (at 5M points a reserve of 6.75 was exceeded by
+  // 0.1% and the peak went from ~290 to ~495 bytes/point).
+  const std::size_t expect = n * (threads > 1 ? 17 : 15) / 2 + 64;
+  s.T.reserve(8 * expect);
+  s.state.reserve(expect);
+  Kernel<false> kernel(s, ids.data(), st, kWalkSeed, std::uint32_t(n));
   kernel.init(0, b, c, d);
   std::size_t done = 0;
-  auto report = [&] {
-    if (options.progress && (++done & 0xFFFF) == 0) options.progress(double(done) / double(n));
+  auto report = [&](std::size_t count) {
+    const std::size_t before = done;
+    done += count;
+    if (options.progress && (before >> 16) != (done >> 16)) options.progress(double(done) / double(n));
   };
   auto hint_of = [&](std::size_t rank) {
     return order.hint[rank] == kNoHint ? kNone : rank_of[order.hint[rank]];
   };
   for (std::uint32_t r : deferred) {
     kernel.insert(r, hint_of(r));
-    report();
+    report(1);
   }
-  for (; k < n; ++k) {
+  // Parallel rounds start once the first points (in kd-bfs order: a coarse cover of the
+  // domain) are in, so that the tets straddling the slab boundaries are already small.
+  const std::size_t prefix = threads > 1 && n - k >= 2 * kMinParallel ? std::max(k, n / 64) : n;
+  for (; k < prefix; ++k) {
     kernel.insert(std::uint32_t(k), hint_of(k));
-    report();
+    report(1);
   }
-  result.tri = kernel.release();
-  st.exact_fallbacks = pred::exact_calls() - exact0;
+  if (k < n) {
+    std::vector<std::uint32_t> up(n);
+    for (std::size_t r = 0; r < n; ++r) up[r] = hint_of(r);
+    const std::vector<std::uint32_t> todo =
+        insert_in_rounds(s, kernel, k, up.data(), ids.data(), threads, st, report);
+    for (std::uint32_t r : todo) {
+      kernel.insert(r, hint_of(r));
+      report(1);
+    }
+  }
+  result.tri = release(s, ids.data());
+  st.exact_fallbacks += pred::exact_calls() - exact0;
   st.seconds = clock.seconds();
   if (options.progress) options.progress(1.0);
   return result;
@@ -493,10 +815,19 @@ void delaunay_insert(Triangulation& tri, const PointSet& points,
   const std::uint64_t exact0 = pred::exact_calls();
   std::vector<std::uint32_t> identity(n);
   for (std::size_t i = 0; i < n; ++i) identity[i] = std::uint32_t(i);
-  Kernel kernel(points, identity.data(), stats);
-  kernel.adopt(std::move(tri), ids.size());
+  Store s;
+  s.xyz = points.xyz.data();
+  s.n = n;
+  s.v2t.assign(n + 1, kNone);
+  s.T = std::move(tri.data);
+  s.T.reserve(s.T.size() + 8 * (ids.size() * 15 / 2 + 64));
+  s.state.assign(s.num_tets(), kUnvisited);
+  for (std::size_t t = 0; t < s.num_tets(); ++t)
+    for (int i = 0; i < 4; ++i)
+      if (s.T[8 * t + i] != kInf) s.v2t[s.T[8 * t + i]] = std::uint32_t(t);
+  Kernel<false> kernel(s, identity.data(), stats, kWalkSeed, std::uint32_t(n));
   for (std::size_t k = 0; k < ids.size(); ++k) kernel.insert(ids[k], hints[k]);
-  tri = kernel.release();
+  tri = release(s, identity.data());
   stats.exact_fallbacks += pred::exact_calls() - exact0;
   stats.seconds += clock.seconds();
 }

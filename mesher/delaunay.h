@@ -15,6 +15,10 @@ namespace kdmesh {
 struct DelaunayOptions {
   /// Called now and then with the fraction of points inserted (0..1]; may be empty.
   std::function<void(double)> progress;
+  /// Inserting threads: 1 = sequential, 0 = one per hardware thread. Any count gives the same
+  /// tets (in a different order); runs with the same count are identical, counts included.
+  /// Below ~40k points the kernel runs sequentially whatever this says.
+  unsigned threads = 1;
 };
 
 struct DelaunayStats {
@@ -24,6 +28,8 @@ struct DelaunayStats {
   std::uint64_t exact_fallbacks = 0;  ///< predicate calls the float filter could not decide
   std::vector<std::uint32_t> duplicates;    ///< ids of points skipped as exact duplicates ...
   std::vector<std::uint32_t> duplicate_of;  ///< ... and the id of the vertex each one repeats
+  unsigned parallel_rounds = 0;     ///< rounds on several threads (0: sequential run)
+  std::uint64_t deferrals = 0;      ///< times a parallel worker put a point off to a later round
   double seconds = 0;               ///< wall time of the whole insertion
 };
 

@@ -93,6 +93,26 @@ TEST(Cli, CgalKernelAndOrders) {
   EXPECT_NE(bad.err.find("--kernel cgal"), std::string::npos) << bad.err;
 }
 
+// --threads 2 on 50k points: rounds ran (reported in the JSON and the human summary), the
+// check passes, and the tet count is the sequential run's; --threads is refused for CGAL.
+TEST(Cli, DelaunayOnTwoThreadsChecksAndReportsItsRounds) {
+  const fs::path pts = tmpdir() / "cube-threads.xyz";
+  ASSERT_EQ(kdmesh("points --dist cube -n 50000 --seed 3 -q -o " + pts.string()).code, 0);
+  const CliResult one = kdmesh("delaunay " + pts.string() + " --json -q");
+  const CliResult two = kdmesh("delaunay " + pts.string() + " --threads 2 --check --json");
+  ASSERT_EQ(one.code, 0) << one.err;
+  ASSERT_EQ(two.code, 0) << two.err;
+  const auto j1 = nlohmann::json::parse(one.out), j2 = nlohmann::json::parse(two.out);
+  EXPECT_TRUE(j2["check"]["pass"].get<bool>());
+  EXPECT_EQ(j1["tets"], j2["tets"]);
+  EXPECT_EQ(j1["counts"]["parallel_rounds"], 0);
+  EXPECT_GE(j2["counts"]["parallel_rounds"].get<unsigned>(), 1u);
+  EXPECT_NE(two.err.find("rounds on 2 threads"), std::string::npos) << two.err;
+  const CliResult bad = kdmesh("delaunay " + pts.string() + " --kernel cgal --order cgal --threads 2 -q");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("--threads applies to --kernel kdmesh"), std::string::npos) << bad.err;
+}
+
 // --count on a point file (used for Tables 16-17 on the pipeline's node sets): CGAL, given
 // kdmesh's kd-bfs order and hints, removes exactly the cells kdmesh finds in conflict, since
 // both build the same Delaunay triangulations in the same insertion order.

@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include "core/error.h"
 #include "core/timer.h"
@@ -29,6 +30,7 @@ struct Options {
   std::string kernel = "kdmesh";
   std::uint64_t seed = 1;
   bool check = false;
+  unsigned threads = 1;  ///< kdmesh kernel: inserting threads (0 = one per hardware thread)
   bool count = false;  ///< CGAL kernel: count predicates (counting traits; slower)
   std::string max_memory;  ///< empty: the machine's memory
   std::string output;
@@ -85,6 +87,8 @@ int run_delaunay(const Options& o) {
     throw UsageError("--order cgal means CGAL's own insert(range) order and needs --kernel cgal");
   if (o.count && o.kernel != "cgal")
     throw UsageError("--count applies to --kernel cgal (the kdmesh kernel always counts)");
+  if (o.threads != 1 && o.kernel != "kdmesh")
+    throw UsageError("--threads applies to --kernel kdmesh (CGAL and TetGen run sequentially here)");
   Ordering ord;
   if (!cgal_sort) ord = make_order(pts, {parse_order_kind(o.order), o.seed, 0.125});
   const double t_order = clock.seconds();
@@ -97,14 +101,18 @@ int run_delaunay(const Options& o) {
   if (o.kernel == "kdmesh") {
     DelaunayOptions opt;
     opt.progress = out.progress("delaunay");
+    opt.threads = o.threads;
     DelaunayResult r = delaunay(pts, ord, opt);
     tri = std::move(r.tri);
     const double k = double(std::max<std::uint64_t>(r.stats.inserted, 1));
     counts = {{"inserted", r.stats.inserted},
+              {"threads", o.threads},
               {"duplicates", r.stats.duplicates.size()},
               {"orient_tests_per_point", double(r.stats.orient_tests) / k},
               {"conflicts_per_point", double(r.stats.conflicts) / k},
-              {"exact_fallbacks", r.stats.exact_fallbacks}};
+              {"exact_fallbacks", r.stats.exact_fallbacks},
+              {"parallel_rounds", r.stats.parallel_rounds},
+              {"deferrals", r.stats.deferrals}};
     for (std::size_t i = 0; i < r.stats.duplicates.size(); ++i) {
       if (i == 10) {
         out.human() << "  ... " << r.stats.duplicates.size() - 10 << " more duplicates\n";
@@ -153,6 +161,11 @@ int run_delaunay(const Options& o) {
       out.human() << ", exact fallbacks " << counts["exact_fallbacks"].get<std::uint64_t>();
     out.human() << "\n";
   }
+  if (counts.value("parallel_rounds", 0u) > 0)
+    out.human() << "  parallel: " << counts["parallel_rounds"].get<unsigned>() << " rounds on "
+                << (o.threads ? o.threads : std::max(1u, std::thread::hardware_concurrency()))
+                << " threads, " << counts["deferrals"].get<std::uint64_t>()
+                << " points deferred to a later round\n";
   out.human() << std::setprecision(4) << "  time: read " << t_read << " s, order " << t_order
               << " s, delaunay " << t_del << " s\n";
 
@@ -214,6 +227,10 @@ void add_delaunay_command(CLI::App& app, Runner& run) {
       ->check(CLI::IsMember({"kdmesh", "cgal"}))
       ->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of the random and brio orders")->capture_default_str();
+  cmd->add_option("--threads", o->threads,
+                  "kdmesh kernel: inserting threads (0 = one per hardware thread); the tets are "
+                  "the same for any count")
+      ->capture_default_str();
   cmd->add_flag("--check", o->check,
                 "Verify: exact validity, then compare with TetGen 1.5 and CGAL 5.5; exit 5 on mismatch");
   cmd->add_flag("--count", o->count,

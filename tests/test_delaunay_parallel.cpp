@@ -1,0 +1,103 @@
+// The parallel insertion rounds of the Delaunay kernel (DelaunayOptions::threads): the same
+// tets as the sequential kernel on every distribution and on a maximally degenerate lattice,
+// valid by the exact check, deterministic for a thread count, and duplicates handled.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "mesher/delaunay.h"
+#include "mesher/delaunay_check.h"
+#include "mesher/order.h"
+#include "mesher/tet_compare.h"
+#include "tools/lib/distributions.h"
+
+namespace kdmesh {
+namespace {
+
+// Below ~40k points the kernel ignores the thread count; these sizes are just above.
+constexpr std::size_t kN = 45000;
+
+DelaunayResult run(const PointSet& pts, unsigned threads) {
+  DelaunayOptions o;
+  o.threads = threads;
+  return delaunay(pts, make_order(pts, {OrderKind::kd_bfs, 1, 0.125}), o);
+}
+
+std::vector<std::uint32_t> canonical_tets(const PointSet& pts, const Triangulation& tri) {
+  std::vector<std::uint32_t> t = finite_tets(tri);
+  const auto canon = canonical_point_ids(pts);
+  for (auto& v : t) v = canon[v];
+  return t;
+}
+
+void expect_valid(const PointSet& pts, const DelaunayResult& r, const std::string& what) {
+  const ValidityReport rep = check_delaunay(pts, r.tri);
+  std::string msg;
+  for (const auto& p : rep.problems) msg += "\n  " + p;
+  EXPECT_TRUE(rep.ok()) << what << ": " << msg;
+}
+
+/// Runs `pts` sequentially and on `threads` threads; the parallel run must really have used
+/// rounds, be valid, and give the sequential tet set.
+void expect_same_as_sequential(const PointSet& pts, unsigned threads, const std::string& what) {
+  const DelaunayResult seq = run(pts, 1);
+  const DelaunayResult par = run(pts, threads);
+  EXPECT_EQ(seq.stats.parallel_rounds, 0u) << what;
+  EXPECT_GE(par.stats.parallel_rounds, 1u) << what;
+  EXPECT_EQ(par.stats.inserted, seq.stats.inserted) << what;
+  EXPECT_EQ(par.stats.duplicates.size(), seq.stats.duplicates.size()) << what;
+  expect_valid(pts, par, what);
+  EXPECT_TRUE(compare_tets(pts, canonical_tets(pts, seq.tri), canonical_tets(pts, par.tri)).same_set())
+      << what;
+}
+
+TEST(ParallelDelaunay, SameTetsAsSequentialOnEveryDistribution) {
+  for (Distribution d : all_distributions())
+    expect_same_as_sequential(generate_points(d, kN, 4), 2, std::string(distribution_name(d)));
+}
+
+// Three slabs per round (more workers than this machine's cores is still correct).
+TEST(ParallelDelaunay, ThreeWorkersGiveTheSameTets) {
+  expect_same_as_sequential(generate_points(Distribution::cube, kN, 9), 3, "cube, 3 threads");
+}
+
+// A 36^3 integer lattice: cospherical and coplanar ties everywhere, and points exactly on the
+// slab boundaries (the cuts are point coordinates). The symbolic perturbation decides every
+// tie the same way whoever inserts the point.
+TEST(ParallelDelaunay, LatticeTiesAreBrokenAsSequentially) {
+  PointSet pts;
+  for (int i = 0; i < 36; ++i)
+    for (int j = 0; j < 36; ++j)
+      for (int k = 0; k < 36; ++k) pts.push_back(i, j, k);
+  expect_same_as_sequential(pts, 2, "lattice 36^3");
+}
+
+TEST(ParallelDelaunay, DeterministicForAThreadCount) {
+  const PointSet pts = generate_points(Distribution::spiral, kN, 2);
+  const DelaunayResult a = run(pts, 2), b = run(pts, 2);
+  EXPECT_EQ(a.tri.data, b.tri.data);
+  EXPECT_EQ(a.stats.orient_tests, b.stats.orient_tests);
+  EXPECT_EQ(a.stats.conflicts, b.stats.conflicts);
+  EXPECT_EQ(a.stats.deferrals, b.stats.deferrals);
+  EXPECT_GT(a.stats.deferrals, 0u);  // the rounds did meet their slab boundaries
+}
+
+TEST(ParallelDelaunay, DuplicatesAreSkippedInRounds) {
+  PointSet pts = generate_points(Distribution::cube, kN, 6);
+  for (std::uint32_t i = 0; i < 3000; ++i) {
+    const std::uint32_t src = (i * 7919u) % std::uint32_t(kN);
+    pts.push_back(pts.p(src)[0], pts.p(src)[1], pts.p(src)[2]);
+  }
+  const DelaunayResult r = run(pts, 2);
+  EXPECT_EQ(r.stats.inserted, kN);
+  ASSERT_EQ(r.stats.duplicates.size(), 3000u);
+  for (std::size_t i = 0; i < r.stats.duplicates.size(); ++i) {
+    const double *a = pts.p(r.stats.duplicates[i]), *b = pts.p(r.stats.duplicate_of[i]);
+    EXPECT_TRUE(a[0] == b[0] && a[1] == b[1] && a[2] == b[2]);
+  }
+  expect_same_as_sequential(pts, 2, "cube with 3000 repeats");
+}
+
+}  // namespace
+}  // namespace kdmesh

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Usage: bash tools/bench/parallel_side_by_side.sh [OUT_DIR] [N]   (KDMESH=path/to/kdmesh; ~4 min)
+# SPDX-License-Identifier: AGPL-3.0-or-later
+# The kdmesh kernel sequential (--threads 1) and on two threads (--threads 2) against CGAL 5.5
+# insert(range), on N (default 1M) cube and axes points from `kdmesh points --seed 1`. Separate
+# processes, alternated three times so that the machine's drift hits every column alike; each
+# under /usr/bin/time -v. Times are order + Delaunay as `kdmesh delaunay` reports them (CGAL:
+# its insert(range), which sorts internally). Writes summary.md (one row per process) to OUT_DIR.
+set -eu
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+K="${KDMESH:-$here/build/kdmesh}"
+out="${1:-$here/out/parallel-side-by-side}"
+n="${2:-1000000}"
+mkdir -p "$out" && cd "$out"
+echo "| points | kernel | rep | order + Delaunay (s) | peak RSS (kB) | orient/pt | conflicts/pt | rounds | deferrals |" > summary.md
+echo "|---|---|---|---|---|---|---|---|---|" >> summary.md
+for d in cube axes; do
+  [ -f $d.xyz ] || $K points --dist $d -n "$n" --seed 1 -o $d.xyz -q
+  for rep in 1 2 3; do
+    for mode in t1 t2 cgal; do
+      case $mode in
+        t1) args=(--threads 1);;
+        t2) args=(--threads 2);;
+        cgal) args=(--kernel cgal --order cgal);;
+      esac
+      /usr/bin/time -v $K delaunay $d.xyz "${args[@]}" --json -q > $d-$mode-$rep.json 2> $d-$mode-$rep.time
+      python3 - "$d" "$mode" "$rep" >> summary.md <<'PY'
+import json, re, sys
+d, mode, rep = sys.argv[1:4]
+j = json.load(open(f"{d}-{mode}-{rep}.json"))
+rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", open(f"{d}-{mode}-{rep}.time").read()).group(1)
+c = j.get("counts", {})
+sec = j["seconds"]
+total = sec["order"] + sec["delaunay"]
+f = lambda k: ("%.2f" % c[k]) if k in c else ""
+print(f"| {j['points']} {d} | {mode} | {rep} | {total:.3f} | {rss} | {f('orient_tests_per_point')} | "
+      f"{f('conflicts_per_point')} | {c.get('parallel_rounds', '')} | {c.get('deferrals', '')} |")
+PY
+    done
+  done
+done
+cat summary.md
