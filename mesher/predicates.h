@@ -87,7 +87,7 @@ struct Eval {
 
 /// det[b-a, c-a, d-a] in one fixed evaluation order (the one the bounds are derived for).
 template <bool kPermanent>
-inline Eval orient3d_eval(const double* a, const double* b, const double* c, const double* d) {
+[[gnu::always_inline]] inline Eval orient3d_eval(const double* a, const double* b, const double* c, const double* d) {
   const double bax = b[0] - a[0], bay = b[1] - a[1], baz = b[2] - a[2];
   const double cax = c[0] - a[0], cay = c[1] - a[1], caz = c[2] - a[2];
   const double dax = d[0] - a[0], day = d[1] - a[1], daz = d[2] - a[2];
@@ -111,7 +111,7 @@ inline Eval orient3d_eval(const double* a, const double* b, const double* c, con
 /// Shewchuk's insphere determinant det[[a-e, |a-e|^2], ..., [d-e, |d-e|^2]]: > 0 when e is
 /// inside for (a,b,c,d) negatively oriented in kdmesh's convention (callers negate).
 template <bool kPermanent>
-inline Eval insphere_eval(const double* a, const double* b, const double* c, const double* d,
+[[gnu::always_inline]] inline Eval insphere_eval(const double* a, const double* b, const double* c, const double* d,
                           const double* e) {
   const double aex = a[0] - e[0], aey = a[1] - e[1], aez = a[2] - e[2];
   const double bex = b[0] - e[0], bey = b[1] - e[1], bez = b[2] - e[2];
@@ -159,7 +159,7 @@ inline Eval insphere_eval(const double* a, const double* b, const double* c, con
 }
 }  // namespace detail
 
-inline int orient3d(const double* a, const double* b, const double* c, const double* d) {
+[[gnu::always_inline]] inline int orient3d(const double* a, const double* b, const double* c, const double* d) {
   using detail::max2;
   using detail::min2;
   const detail::Eval r = detail::orient3d_eval<false>(a, b, c, d);
