@@ -513,9 +513,43 @@ void compact(Store& s) {
   T.resize(8 * std::size_t(next));
 }
 
+/// Removes the holes by moving the last live tets into them: as many moves as holes, where
+/// compact() shifts every tet after the first hole. For parallel runs, whose unused slot
+/// ranges leave holes all over the array (1M cube points: 0.15 s with compact()). The tets
+/// end up in a different order than compact() would leave them.
+void compact_from_end(Store& s) {
+  std::vector<std::uint32_t>& T = s.T;
+  const std::size_t m = T.size() / 8;
+  std::size_t live = 0;
+  for (std::size_t t = 0; t < m; ++t) live += T[8 * t] != kDead;
+  std::vector<std::uint32_t> moved_to(m - live, kNone);  // tail tet t -> moved_to[t - live]
+  std::size_t hole = 0;
+  for (std::size_t t = live; t < m; ++t) {
+    if (T[8 * t] == kDead) continue;
+    while (T[8 * hole] != kDead) ++hole;  // there are as many holes below live as tets above
+    std::copy(T.begin() + std::ptrdiff_t(8 * t), T.begin() + std::ptrdiff_t(8 * t + 8),
+              T.begin() + std::ptrdiff_t(8 * hole));
+    moved_to[t - live] = std::uint32_t(hole++);
+  }
+  for (std::uint32_t h : moved_to) {
+    if (h == kNone) continue;
+    for (std::uint32_t f = 0; f < 4; ++f) {
+      const std::uint32_t a = T[8 * std::size_t(h) + 4 + f];
+      std::uint32_t u = a >> 2;
+      if (u >= live) u = moved_to[u - live];
+      T[8 * std::size_t(h) + 4 + f] = 4 * u + (a & 3);
+      T[8 * std::size_t(u) + 4 + (a & 3)] = 4 * h + f;
+    }
+  }
+  T.resize(8 * live);
+}
+
 /// Moves the (compacted) records out, with vertices renumbered to the caller's ids.
-Triangulation release(Store& s, const std::uint32_t* ids) {
-  compact(s);
+Triangulation release(Store& s, const std::uint32_t* ids, bool holes_everywhere = false) {
+  if (holes_everywhere)
+    compact_from_end(s);
+  else
+    compact(s);
   for (std::size_t i = 0; i < s.T.size(); i += 8)
     for (std::size_t k = i; k < i + 4; ++k)
       if (s.T[k] != kInf) s.T[k] = ids[s.T[k]];
@@ -528,6 +562,8 @@ constexpr std::uint64_t kWalkSeed = 0x6b646d657368ULL;
 
 /// Points below this many go to the sequential kernel: parallel rounds would not pay.
 constexpr std::size_t kMinParallel = 20000;
+/// Deferred points left over below this many are inserted sequentially.
+constexpr std::size_t kMinRound = 4096;
 /// Each parallel round takes the next points of the order up to this many times the points
 /// already in, so that the tets straddling slab boundaries are small compared with the domain
 /// (1M cube points: 45.5k deferrals with 2, 62.9k with 4).
@@ -658,7 +694,7 @@ std::vector<std::uint32_t> insert_in_rounds(Store& s, Kernel<false>& seq, std::s
     const std::size_t end = next == n ? n : std::min(n, std::max(next + kMinParallel, next * kRoundGrowth));
     for (std::size_t r = next; r < end; ++r) todo.push_back(std::uint32_t(r));
     next = end;
-    if (next == n && todo.size() < kMinParallel) break;
+    if (next == n && todo.size() < kMinRound) break;
     // Slabs of equal count, across a direction other than the last round's.
     last_dir = pick_direction(s, todo, dirs, last_dir, threads);
     const Direction& dir = dirs[last_dir];
@@ -843,7 +879,7 @@ DelaunayResult delaunay(const PointSet& points, const Ordering& order,
       report(1);
     }
   }
-  result.tri = release(s, ids.data());
+  result.tri = release(s, ids.data(), st.parallel_rounds > 0);
   st.exact_fallbacks += pred::exact_calls() - exact0;
   st.seconds = clock.seconds();
   if (options.progress) options.progress(1.0);
