@@ -599,36 +599,47 @@ Directions slab_directions(const Store& s, std::size_t first) {
   return dirs;
 }
 
-/// Picks the direction of a round's slabs, other than `last`: the one whose cuts fall where the
-/// points are sparsest, i.e. with the widest band between the quantiles 5% either side of each
-/// cut (judged on a sample of at most ~20k points). On points along the coordinate axes, an
-/// axis cut would run along two of them; a diagonal cuts all three across.
+/// Picks the direction of a round's slabs, other than the last two rounds' (so that the points
+/// deferred near their cuts are away from this one's): the one whose cuts (at the
+/// round's quantiles, judged on a sample of at most ~20k of its points) straddle the fewest tets
+/// of the current triangulation (a sample of at most ~40k). A straddling tet cannot change
+/// during the round, and every point whose cavity reaches it is deferred. On points along the
+/// coordinate axes an axis cut runs along two of them; on a cylinder's surface a cut along the
+/// axis crosses the long tets through the interior; on a cube any axis will do.
 std::size_t pick_direction(const Store& s, const std::vector<std::uint32_t>& todo,
-                           const Directions& dirs, std::size_t last, unsigned threads) {
-  const std::size_t stride = todo.size() / 20000 + 1;
+                           const Directions& dirs, const std::array<std::size_t, 2>& recent,
+                           unsigned threads) {
+  std::vector<std::vector<double>> cuts(dirs.size());
   std::vector<double> key;
-  double best_width = -1;
-  std::size_t best = 0;
-  for (std::size_t cand = 0; cand < dirs.size(); ++cand) {
-    if (cand == last) continue;
+  const std::size_t stride = todo.size() / 20000 + 1;
+  for (std::size_t d = 0; d < dirs.size(); ++d) {
     key.clear();
-    for (std::size_t i = 0; i < todo.size(); i += stride) key.push_back(along(dirs[cand], s.P(todo[i])));
-    auto quantile = [&](double q) {
-      const std::size_t k = std::min(key.size() - 1, std::size_t(std::max(0.0, q) * double(key.size())));
-      std::nth_element(key.begin(), key.begin() + std::ptrdiff_t(k), key.end());
-      return key[k];
-    };
-    double width = HUGE_VAL;
+    for (std::size_t i = 0; i < todo.size(); i += stride) key.push_back(along(dirs[d], s.P(todo[i])));
     for (unsigned w = 1; w < threads; ++w) {
-      const double q = double(w) / threads;
-      width = std::min(width, quantile(q + 0.05) - quantile(q - 0.05));
-    }
-    width /= std::sqrt(along(dirs[cand], dirs[cand].data()));
-    if (width > best_width) {
-      best_width = width;
-      best = cand;
+      const std::size_t k = std::min(key.size() - 1, key.size() * w / threads);
+      std::nth_element(key.begin(), key.begin() + std::ptrdiff_t(k), key.end());
+      cuts[d].push_back(key[k]);
     }
   }
+  std::vector<std::size_t> straddling(dirs.size(), 0);
+  const std::size_t m = s.num_tets(), tstride = m / 40000 + 1;
+  for (std::size_t t = 0; t < m; t += tstride) {
+    const std::uint32_t* v = &s.T[8 * t];
+    if (v[0] == kDead || v[0] == kInf || v[1] == kInf || v[2] == kInf || v[3] == kInf) continue;
+    for (std::size_t d = 0; d < dirs.size(); ++d) {
+      double lo = HUGE_VAL, hi = -HUGE_VAL;
+      for (int i = 0; i < 4; ++i) {
+        const double x = along(dirs[d], s.P(v[i]));
+        lo = std::min(lo, x);
+        hi = std::max(hi, x);
+      }
+      for (double c : cuts[d]) straddling[d] += lo < c && hi >= c;
+    }
+  }
+  std::size_t best = dirs.size();
+  for (std::size_t d = 0; d < dirs.size(); ++d)
+    if (d != recent[0] && d != recent[1] && (best == dirs.size() || straddling[d] < straddling[best]))
+      best = d;
   return best;
 }
 
@@ -689,15 +700,16 @@ std::vector<std::uint32_t> insert_in_rounds(Store& s, Kernel<false>& seq, std::s
   std::vector<std::vector<std::uint32_t>> mine(threads), deferred(threads);
   std::vector<std::uint32_t> todo;
   std::size_t next = first;  // the first rank not yet given to a round
-  std::size_t last_dir = dirs.size();  // none yet
+  std::array<std::size_t, 2> recent = {dirs.size(), dirs.size()};  // the last two rounds' (none yet)
   for (int round = 0;; ++round) {
     const std::size_t end = next == n ? n : std::min(n, std::max(next + kMinParallel, next * kRoundGrowth));
     for (std::size_t r = next; r < end; ++r) todo.push_back(std::uint32_t(r));
     next = end;
     if (next == n && todo.size() < kMinRound) break;
     // Slabs of equal count, across a direction other than the last round's.
-    last_dir = pick_direction(s, todo, dirs, last_dir, threads);
-    const Direction& dir = dirs[last_dir];
+    const std::size_t pick = pick_direction(s, todo, dirs, recent, threads);
+    recent = {pick, recent[0]};
+    const Direction& dir = dirs[pick];
     const std::vector<double> cuts = slab_cuts(s, todo, dir, threads);
     for (auto& m : mine) m.clear();
     for (std::uint32_t r : todo) {
