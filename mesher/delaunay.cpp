@@ -496,11 +496,15 @@ class Kernel {
 void compact(Store& s) {
   std::vector<std::uint32_t>& T = s.T;
   const std::size_t m = T.size() / 8;
+  // Sequential insertion leaves no hole (a cavity of k tets is refilled by at least k + 2
+  // new ones), so usually there is nothing to do, and no remap table to allocate.
+  std::size_t first_dead = 0;
+  while (first_dead < m && T[8 * first_dead] != kDead) ++first_dead;
+  if (first_dead == m) return;
   std::vector<std::uint32_t> remap(m, kNone);
   std::uint32_t next = 0;
   for (std::size_t t = 0; t < m; ++t)
     if (T[8 * t] != kDead) remap[t] = next++;
-  if (next == m) return;
   for (std::size_t t = 0; t < m; ++t) {
     if (remap[t] == kNone) continue;
     const std::size_t d = 8 * std::size_t(remap[t]);
@@ -575,7 +579,7 @@ constexpr std::size_t kRoundGrowth = 2;
 /// each worker inserts its slab's points in order and defers those that need a tet it does not
 /// own. Deferred points are near a slab boundary, which the next round moves to another
 /// direction. Returns the points still left when
-/// rounds stop paying; `seq` inserts them. `up[r]` is the hint of rank r. Deterministic:
+/// rounds stop paying; `seq` inserts them. `hint_of(r)` is the hint of rank r. Deterministic:
 /// within a round the tets that straddle a slab boundary cannot change, so each worker's work
 /// does not depend on the others' timing.
 /// Slab directions of the parallel rounds: the axes (sorted longest extent first by
@@ -684,9 +688,9 @@ void run_workers(unsigned threads, const Work& work) {
     if (e) std::rethrow_exception(e);
 }
 
-template <class Report>
+template <class HintOf, class Report>
 std::vector<std::uint32_t> insert_in_rounds(Store& s, Kernel<false>& seq, std::size_t first,
-                                            const std::uint32_t* up, const std::uint32_t* ids,
+                                            const HintOf& hint_of, const std::uint32_t* ids,
                                             unsigned threads, DelaunayStats& st, const Report& report) {
   const std::size_t n = s.n;
   const Directions dirs = slab_directions(s, first);
@@ -737,7 +741,7 @@ std::vector<std::uint32_t> insert_in_rounds(Store& s, Kernel<false>& seq, std::s
       k.enter(terr[w]);
       deferred[w].clear();
       for (std::uint32_t r : mine[w])
-        if (!k.insert(r, up[r])) deferred[w].push_back(r);
+        if (!k.insert(r, hint_of(r))) deferred[w].push_back(r);
       k.leave();
       exact[w] += pred::exact_calls() - exact0;
     };
@@ -882,10 +886,8 @@ DelaunayResult delaunay(const PointSet& points, const Ordering& order,
     report(1);
   }
   if (k < n) {
-    std::vector<std::uint32_t> up(n);
-    for (std::size_t r = 0; r < n; ++r) up[r] = hint_of(r);
     const std::vector<std::uint32_t> todo =
-        insert_in_rounds(s, kernel, k, up.data(), ids.data(), threads, st, report);
+        insert_in_rounds(s, kernel, k, hint_of, ids.data(), threads, st, report);
     for (std::uint32_t r : todo) {
       kernel.insert(r, hint_of(r));
       report(1);

@@ -1,22 +1,25 @@
 #!/usr/bin/env bash
-# Usage: bash tools/bench/parallel_side_by_side.sh [OUT_DIR] [N]   (KDMESH=path/to/kdmesh; ~4 min)
+# Usage: bash tools/bench/parallel_side_by_side.sh [OUT_DIR] [N]   (KDMESH=path/to/kdmesh; ~3 min)
+#        DISTS="cube axes" (default) or any of the seven distributions; REPS=3 (default)
 # SPDX-License-Identifier: AGPL-3.0-or-later
 # The kdmesh kernel sequential (--threads 1) and on two threads (--threads 2) against CGAL 5.5
-# insert(range), on N (default 1M) cube and axes points from `kdmesh points --seed 1`. Separate
-# processes, alternated three times so that the machine's drift hits every column alike; each
-# under /usr/bin/time -v. Times are order + Delaunay as `kdmesh delaunay` reports them (CGAL:
+# insert(range), on N (default 1M) points of each distribution in DISTS from `kdmesh points
+# --seed 1`. Separate processes, alternated REPS times so that the machine's drift hits every
+# column alike; each under /usr/bin/time -v. Times are order + Delaunay as `kdmesh delaunay` reports them (CGAL:
 # its insert(range), which sorts internally). Writes summary.md (one row per process) to OUT_DIR.
 set -eu
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 K="${KDMESH:-$here/build/kdmesh}"
 out="${1:-$here/out/parallel-side-by-side}"
 n="${2:-1000000}"
+dists="${DISTS:-cube axes}"
+reps="${REPS:-3}"
 mkdir -p "$out" && cd "$out"
 echo "| points | kernel | rep | order + Delaunay (s) | peak RSS (kB) | orient/pt | conflicts/pt | rounds | deferrals |" > summary.md
 echo "|---|---|---|---|---|---|---|---|---|" >> summary.md
-for d in cube axes; do
+for d in $dists; do
   [ -f $d.xyz ] || $K points --dist $d -n "$n" --seed 1 -o $d.xyz -q
-  for rep in 1 2 3; do
+  for rep in $(seq 1 "$reps"); do
     for mode in t1 t2 cgal; do
       case $mode in
         t1) args=(--threads 1);;
