@@ -710,7 +710,7 @@ std::vector<std::uint32_t> insert_in_rounds(Store& s, Kernel<false>& seq, std::s
     for (std::size_t r = next; r < end; ++r) todo.push_back(std::uint32_t(r));
     next = end;
     if (next == n && todo.size() < kMinRound) break;
-    // Slabs of equal count, across a direction other than the last round's.
+    // Slabs of equal count, across a direction other than the last two rounds'.
     const std::size_t pick = pick_direction(s, todo, dirs, recent, threads);
     recent = {pick, recent[0]};
     const Direction& dir = dirs[pick];
@@ -847,8 +847,11 @@ DelaunayResult delaunay(const PointSet& points, const Ordering& order,
                         " points are coplanar; no tetrahedralization exists");
   const std::uint32_t d = std::uint32_t(k++);
 
+  if (options.threads > 256)
+    throw UsageError("delaunay: " + std::to_string(options.threads) +
+                     " threads requested; at most 256 are supported");
   const unsigned threads =
-      options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+      options.threads ? options.threads : std::max(1u, std::min(256u, std::thread::hardware_concurrency()));
   Store s;
   s.xyz = ranked.xyz.data();
   s.n = n;

@@ -17,7 +17,8 @@ struct DelaunayOptions {
   std::function<void(double)> progress;
   /// Inserting threads: 1 = sequential, 0 = one per hardware thread. Any count gives the same
   /// tets (in a different order); runs with the same count are identical, counts included.
-  /// Below ~40k points the kernel runs sequentially whatever this says.
+  /// Below ~40k points the kernel runs sequentially whatever this says. At most 256
+  /// (UsageError otherwise).
   unsigned threads = 1;
 };
 

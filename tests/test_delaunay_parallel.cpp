@@ -6,6 +6,7 @@
 
 #include <string>
 
+#include "core/error.h"
 #include "mesher/delaunay.h"
 #include "mesher/delaunay_check.h"
 #include "mesher/order.h"
@@ -97,6 +98,10 @@ TEST(ParallelDelaunay, DuplicatesAreSkippedInRounds) {
     EXPECT_TRUE(a[0] == b[0] && a[1] == b[1] && a[2] == b[2]);
   }
   expect_same_as_sequential(pts, 2, "cube with 3000 repeats");
+}
+
+TEST(ParallelDelaunay, AbsurdThreadCountIsAUsageError) {
+  EXPECT_THROW(run(generate_points(Distribution::cube, 1000, 1), 100000), UsageError);
 }
 
 }  // namespace
