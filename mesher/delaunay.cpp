@@ -257,7 +257,6 @@ class Kernel {
   }
   Stack<std::uint32_t>& free_list() { return free_; }
   void set_last(std::uint32_t t) { last_ = t; }
-  std::uint32_t last() const { return last_; }
 
  private:
   std::uint32_t& vert(std::uint32_t t, int i) { return T_[8 * std::size_t(t) + i]; }
@@ -852,6 +851,7 @@ DelaunayResult delaunay(const PointSet& points, const Ordering& order,
                      " threads requested; at most 256 are supported");
   const unsigned threads =
       options.threads ? options.threads : std::max(1u, std::min(256u, std::thread::hardware_concurrency()));
+  st.threads = threads;
   Store s;
   s.xyz = ranked.xyz.data();
   s.n = n;

@@ -29,6 +29,7 @@ struct DelaunayStats {
   std::uint64_t exact_fallbacks = 0;  ///< predicate calls the float filter could not decide
   std::vector<std::uint32_t> duplicates;    ///< ids of points skipped as exact duplicates ...
   std::vector<std::uint32_t> duplicate_of;  ///< ... and the id of the vertex each one repeats
+  unsigned threads = 1;             ///< inserting threads the run was given (options resolved)
   unsigned parallel_rounds = 0;     ///< rounds on several threads (0: sequential run)
   std::uint64_t deferrals = 0;      ///< times a parallel worker put a point off to a later round
   double seconds = 0;               ///< wall time of the whole insertion

@@ -5,7 +5,6 @@
 #include <iomanip>
 #include <sstream>
 #include <string>
-#include <thread>
 
 #include "core/error.h"
 #include "core/timer.h"
@@ -106,7 +105,7 @@ int run_delaunay(const Options& o) {
     tri = std::move(r.tri);
     const double k = double(std::max<std::uint64_t>(r.stats.inserted, 1));
     counts = {{"inserted", r.stats.inserted},
-              {"threads", o.threads},
+              {"threads", r.stats.threads},
               {"duplicates", r.stats.duplicates.size()},
               {"orient_tests_per_point", double(r.stats.orient_tests) / k},
               {"conflicts_per_point", double(r.stats.conflicts) / k},
@@ -163,8 +162,7 @@ int run_delaunay(const Options& o) {
   }
   if (counts.value("parallel_rounds", 0u) > 0)
     out.human() << "  parallel: " << counts["parallel_rounds"].get<unsigned>() << " rounds on "
-                << (o.threads ? o.threads : std::max(1u, std::thread::hardware_concurrency()))
-                << " threads, " << counts["deferrals"].get<std::uint64_t>()
+                << counts["threads"].get<unsigned>() << " threads, " << counts["deferrals"].get<std::uint64_t>()
                 << " points deferred to a later round\n";
   out.human() << std::setprecision(4) << "  time: read " << t_read << " s, order " << t_order
               << " s, delaunay " << t_del << " s\n";
