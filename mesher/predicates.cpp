@@ -8,6 +8,9 @@
 #include <cassert>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+
+#include "mesher/wide_int.h"
 
 namespace kdmesh::pred {
 
@@ -70,9 +73,123 @@ void cross2(mpz_t out, const mpz_t x, const mpz_t y, const mpz_t z, const mpz_t 
   mpz_sub(out, out, tmp);
 }
 
+// ---- Fast exact stage: 64-bit integers and fixed-width products ----------------------------
+//
+// When the coordinate differences a predicate needs are exact in double (always true for
+// points within a factor of 2 of each other, Sterbenz), and all of them are integer multiples
+// of one power of two 2^lo with magnitude below 2^(lo + 62), each difference is an int64 x with
+// |x| < 2^62 and the determinant is a polynomial in those integers, evaluated exactly below
+// in fixed widths (mesher/wide_int.h):
+//   2x2 minors < 2^125 (__int128), 3x3 minors < 3 2^187 < 2^189 (3 limbs),
+//   lifts < 3 2^124 < 2^126 (__int128), insphere's four lift x minor terms < 4 2^315 = 2^317
+//   (5 limbs). Every width leaves at least 2 bits of headroom.
+// The common scale 2^lo is positive, so signs are those of the determinants in the doubles'
+// own values. Otherwise (an inexact difference, exponents spread over more than 62 bits,
+// subnormal or non-finite values) the GMP path below computes from the coordinates.
+
+/// d = a - b, exactly: false when the rounded difference is not exact (Knuth's TwoSum tail).
+inline bool exact_diff(double a, double b, double& d) {
+  const double x = a - b;
+  const double bv = a - x;
+  const double av = x + bv;
+  const double tail = (a - av) + (bv - b);
+  d = x;
+  return tail == 0.0;
+}
+
+/// Converts n exact doubles to integers sharing a scale 2^lo (|out[i]| < 2^62); false if that
+/// is impossible (see above).
+bool scale_to_int64(const double* d, int n, std::int64_t* out) {
+  std::uint64_t mant[12];
+  int low[12];
+  int lo = 1 << 20, hi = -(1 << 20);
+  for (int i = 0; i < n; ++i) {
+    std::uint64_t bits;
+    std::memcpy(&bits, &d[i], sizeof bits);
+    bits &= ~(std::uint64_t(1) << 63);
+    if (bits == 0) {
+      mant[i] = 0;
+      continue;
+    }
+    const int e = int(bits >> 52);
+    if (e == 0 || e == 0x7ff) return false;  // subnormal, inf or NaN
+    const std::uint64_t m = (bits & ((std::uint64_t(1) << 52) - 1)) | (std::uint64_t(1) << 52);
+    const int tz = __builtin_ctzll(m);
+    mant[i] = m >> tz;
+    low[i] = e - 1075 + tz;  // |d| = mant 2^low
+    lo = std::min(lo, low[i]);
+    hi = std::max(hi, e - 1075 + 53);  // |d| < 2^hi
+  }
+  if (hi - lo > 62) return false;
+  for (int i = 0; i < n; ++i) {
+    const std::int64_t v = mant[i] == 0 ? 0 : std::int64_t(mant[i] << (low[i] - lo));
+    out[i] = d[i] < 0 ? -v : v;
+  }
+  return true;
+}
+
+/// The 12 (or 9) exact differences of rows p[1..] (p[0] for orient3d) against `base`.
+bool int_rows(const double* const* rows, int nrows, const double* base, std::int64_t* out) {
+  double d[12];
+  for (int i = 0; i < nrows; ++i)
+    for (int k = 0; k < 3; ++k)
+      if (!exact_diff(rows[i][k], base[k], d[3 * i + k])) return false;
+  return scale_to_int64(d, 3 * nrows, out);
+}
+
+inline __int128 minor2(std::int64_t a, std::int64_t b, std::int64_t c, std::int64_t d) {
+  return __int128(a) * b - __int128(c) * d;
+}
+
+/// x * m for an int64 and a 2-limb minor: 3 limbs.
+inline wide::Int<3> times(std::int64_t x, __int128 m) {
+  return wide::mul(wide::from_i64(x), wide::from_i128(m));
+}
+
 }  // namespace
 
 std::uint64_t exact_calls() { return t_exact_calls; }
+
+/// Sign of det[b-a, c-a, d-a] in integers, or 2 when the fast stage does not apply.
+int detail::orient3d_int(const double* a, const double* b, const double* c, const double* d) {
+  const double* rows[3] = {b, c, d};
+  std::int64_t v[9];
+  if (!int_rows(rows, 3, a, v)) return 2;
+  const std::int64_t *ba = v, *ca = v + 3, *da = v + 6;
+  wide::Int<3> det = times(ba[0], minor2(ca[1], da[2], ca[2], da[1]));
+  det = wide::add(det, times(ba[1], minor2(ca[2], da[0], ca[0], da[2])));
+  det = wide::add(det, times(ba[2], minor2(ca[0], da[1], ca[1], da[0])));
+  return wide::sign(det);
+}
+
+/// Sign of Shewchuk's insphere determinant (insphere_exact's convention applied), or 2.
+int detail::insphere_int(const double* a, const double* b, const double* c, const double* d,
+                         const double* e) {
+  const double* rows[4] = {a, b, c, d};
+  std::int64_t v[12];
+  if (!int_rows(rows, 4, e, v)) return 2;
+  const std::int64_t *ae = v, *be = v + 3, *ce = v + 6, *de = v + 9;
+  const __int128 ab = minor2(ae[0], be[1], be[0], ae[1]);
+  const __int128 bc = minor2(be[0], ce[1], ce[0], be[1]);
+  const __int128 cd = minor2(ce[0], de[1], de[0], ce[1]);
+  const __int128 da = minor2(de[0], ae[1], ae[0], de[1]);
+  const __int128 ac = minor2(ae[0], ce[1], ce[0], ae[1]);
+  const __int128 bd = minor2(be[0], de[1], de[0], be[1]);
+  using wide::add;
+  using wide::sub;
+  const wide::Int<3> abc = add(sub(times(ae[2], bc), times(be[2], ac)), times(ce[2], ab));
+  const wide::Int<3> bcd = add(sub(times(be[2], cd), times(ce[2], bd)), times(de[2], bc));
+  const wide::Int<3> cda = add(add(times(ce[2], da), times(de[2], ac)), times(ae[2], cd));
+  const wide::Int<3> dab = add(add(times(de[2], ab), times(ae[2], bd)), times(be[2], da));
+  auto lift = [](const std::int64_t* r) {
+    return wide::from_i128(__int128(r[0]) * r[0] + __int128(r[1]) * r[1] + __int128(r[2]) * r[2]);
+  };
+  // det = (dlift*abc - clift*dab) + (blift*cda - alift*bcd)
+  wide::Int<5> det = sub(wide::mul(lift(de), abc), wide::mul(lift(ce), dab));
+  det = add(det, sub(wide::mul(lift(be), cda), wide::mul(lift(ae), bcd)));
+  return -wide::sign(det);  // Shewchuk's sign is opposite to kdmesh's orientation convention
+}
+
 
 int orient3d_permanent(const double* a, const double* b, const double* c, const double* d) {
   const detail::Eval r = detail::orient3d_eval<true>(a, b, c, d);
@@ -93,6 +210,18 @@ int insphere_permanent(const double* a, const double* b, const double* c, const 
 
 int orient3d_exact(const double* a, const double* b, const double* c, const double* d) {
   ++t_exact_calls;
+  const int fast = detail::orient3d_int(a, b, c, d);
+  return fast != 2 ? fast : detail::orient3d_gmp(a, b, c, d);
+}
+
+int insphere_exact(const double* a, const double* b, const double* c, const double* d,
+                   const double* e) {
+  ++t_exact_calls;
+  const int fast = detail::insphere_int(a, b, c, d, e);
+  return fast != 2 ? fast : detail::insphere_gmp(a, b, c, d, e);
+}
+
+int detail::orient3d_gmp(const double* a, const double* b, const double* c, const double* d) {
   Scratch& s = scratch();
   mpz_t* r = s.r;
   const double* pts[4] = {a, b, c, d};
@@ -117,9 +246,8 @@ int orient3d_exact(const double* a, const double* b, const double* c, const doub
   return mpz_sgn(acc);
 }
 
-int insphere_exact(const double* a, const double* b, const double* c, const double* d,
-                   const double* e) {
-  ++t_exact_calls;
+int detail::insphere_gmp(const double* a, const double* b, const double* c, const double* d,
+                         const double* e) {
   Scratch& s = scratch();
   mpz_t* r = s.r;
   const double* pts[5] = {a, b, c, d, e};

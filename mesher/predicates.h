@@ -10,8 +10,10 @@
 // Every function returns the exact sign (-1, 0, +1) for any finite double input: a fast
 // floating-point evaluation is accepted when an error bound proves the sign; otherwise the
 // determinant is evaluated exactly in integer arithmetic (every double is an integer times a
-// power of two). Two bounds, both from Shewchuk's stage-A analysis (error <= c*eps*permanent,
-// c = 7 for orient3d, 16 for insphere, for exactly this evaluation order):
+// power of two): in 64-bit integers and fixed-width products when the coordinate differences
+// allow it (nearby points, e.g. lattice ties), else in GMP integers. Two bounds, both from
+// Shewchuk's stage-A analysis (error <= c*eps*permanent, c = 7 for orient3d, 16 for insphere,
+// for exactly this evaluation order):
 //  - semi-static (cheap): for orient3d the permanent is bounded by the largest coordinate
 //    differences m_x, m_y, m_z: permanent <= 6 m_x m_y m_z. For insphere it is bounded by the
 //    lifts L_a..L_d the evaluation computes anyway (see "insphere lift bound" below). Valid while
@@ -30,6 +32,18 @@ namespace kdmesh::pred {
 int orient3d_exact(const double* a, const double* b, const double* c, const double* d);
 int insphere_exact(const double* a, const double* b, const double* c, const double* d,
                    const double* e);
+namespace detail {
+/// The exact stage's two paths, public for the tests. The fast one works on the coordinate
+/// differences as 64-bit integers of one scale and fixed-width products; it returns 2 when it
+/// does not apply (an inexact difference, exponents spread over more than 62 bits, subnormal
+/// or non-finite values). The general one computes in GMP integers from the coordinates.
+int orient3d_int(const double* a, const double* b, const double* c, const double* d);
+int insphere_int(const double* a, const double* b, const double* c, const double* d,
+                 const double* e);
+int orient3d_gmp(const double* a, const double* b, const double* c, const double* d);
+int insphere_gmp(const double* a, const double* b, const double* c, const double* d,
+                 const double* e);
+}  // namespace detail
 /// True if a, b, c lie on one line (exact).
 bool collinear(const double* a, const double* b, const double* c);
 /// Number of exact evaluations performed by this thread so far.

@@ -203,6 +203,89 @@ TEST(Predicates, ExtremeScalesUseExactArithmetic) {
             oracle_insphere(O, a, b, c, d));
 }
 
+// The exact stage's fast path (64-bit integers of one scale, fixed-width products) against
+// the GMP path and the rational oracle, on the inputs it exists for: ties and near-ties among
+// nearby points of a lattice whose spacing is not a power of two (as the block model's BCC
+// interior: full 53-bit mantissas, differences exact by Sterbenz). A bug here would give wrong
+// tie signs, so every sign is compared, and the test asserts that the fast path did run and
+// that exact ties occurred.
+TEST(Predicates, ExactIntegerStageAgreesWithGmpOnLatticeTies) {
+  Rng rng(11);
+  const double h = 0.40071, off = 3.2056799999999996;
+  auto lattice = [&](P3& q) {  // a BCC lattice node near the origin of a 4x4x4 block
+    const double half = rng.below(2) ? 0.5 : 0.0;
+    for (int k = 0; k < 3; ++k) q[k] = off + (double(rng.below(4)) + half) * h;
+  };
+  int fast = 0, orient_ties = 0, insphere_ties = 0;
+  for (int iter = 0; iter < 4000; ++iter) {
+    P3 p[5];
+    for (auto& q : p) lattice(q);
+    if (iter % 4 == 3)  // a near-tie: e one rounding step off a lattice node
+      p[4][iter % 3] = std::nextafter(p[4][iter % 3], 10.0);
+    const double *a = p[0].data(), *b = p[1].data(), *c = p[2].data(), *d = p[3].data(),
+                 *e = p[4].data();
+    const int oi = pred::detail::orient3d_int(a, b, c, d);
+    const int si = pred::detail::insphere_int(a, b, c, d, e);
+    fast += (oi != 2) + (si != 2);
+    const int og = pred::detail::orient3d_gmp(a, b, c, d), sg = pred::detail::insphere_gmp(a, b, c, d, e);
+    if (oi != 2) {
+      ASSERT_EQ(oi, og) << "iter " << iter;
+    }
+    if (si != 2) {
+      ASSERT_EQ(si, sg) << "iter " << iter;
+    }
+    orient_ties += og == 0;
+    insphere_ties += sg == 0;
+    if (iter % 10 == 0) {  // the oracle is slow
+      ASSERT_EQ(og, oracle_orient(p[0], p[1], p[2], p[3])) << "iter " << iter;
+      ASSERT_EQ(sg, oracle_insphere(p[0], p[1], p[2], p[3], p[4])) << "iter " << iter;
+    }
+  }
+  EXPECT_GT(fast, 7900);  // nearby lattice points: the fast path applies to (nearly) all
+  EXPECT_GT(orient_ties, 100);
+  EXPECT_GT(insphere_ties, 100);
+}
+
+// The fast path's widths are sized for differences below 2^62 of their common scale: inputs at
+// that limit (the largest products) must still agree with the oracle, and one bit more, an
+// inexact difference, or a subnormal must hand over to the GMP path (2).
+TEST(Predicates, ExactIntegerStageAtItsLimits) {
+  const double big = std::ldexp(double((std::uint64_t(1) << 53) - 1), 9);  // just below 2^62
+  Rng rng(5);
+  int zeros = 0;
+  for (int iter = 0; iter < 2000; ++iter) {
+    P3 p[5];
+    for (auto& q : p)
+      for (double& x : q) {
+        const std::uint64_t r = rng.below(5);
+        x = r == 0 ? 0.0 : r == 1 ? 1.0 : r == 2 ? -1.0 : r == 3 ? big : -big;
+      }
+    p[4] = {0, 0, 0};  // differences against e are the coordinates themselves
+    const double *a = p[0].data(), *b = p[1].data(), *c = p[2].data(), *d = p[3].data(),
+                 *e = p[4].data();
+    const int si = pred::detail::insphere_int(a, b, c, d, e);
+    ASSERT_NE(si, 2);
+    ASSERT_EQ(si, oracle_insphere(p[0], p[1], p[2], p[3], p[4])) << "iter " << iter;
+    const int oi = pred::detail::orient3d_int(e, a, b, c);
+    ASSERT_NE(oi, 2);
+    ASSERT_EQ(oi, oracle_orient(p[4], p[0], p[1], p[2])) << "iter " << iter;
+    zeros += si == 0;
+  }
+  EXPECT_GT(zeros, 10);
+  EXPECT_LT(zeros, 1900);
+  const P3 o{0, 0, 0}, x{1, 0, 0}, y{0, 1, 0};
+  const P3 wide{std::ldexp(1.0, 62), 0, 0};  // |d| < 2^63: one bit beyond the widths
+  EXPECT_EQ(pred::detail::insphere_int(wide.data(), x.data(), y.data(), o.data(), o.data()), 2);
+  EXPECT_EQ(pred::detail::orient3d_int(o.data(), wide.data(), x.data(), y.data()), 2);
+  const P3 tenth{0.1, 0, 0}, huge{1e17, 0, 0};  // 1e17 - 0.1 is not exact in double
+  EXPECT_EQ(pred::detail::orient3d_int(tenth.data(), huge.data(), x.data(), y.data()), 2);
+  const P3 sub{4.9e-324, 0, 0};  // subnormal difference
+  EXPECT_EQ(pred::detail::orient3d_int(o.data(), sub.data(), x.data(), y.data()), 2);
+  // The public entry points still answer exactly through the GMP path.
+  EXPECT_EQ(pred::orient3d_exact(tenth.data(), huge.data(), x.data(), y.data()),
+            oracle_orient(tenth, huge, x, y));
+}
+
 TEST(Predicates, Collinear) {
   const P3 a{0, 0, 0}, b{1, 2, 3}, c{2, 4, 6}, d{2, 4, 6.000000000000001};
   EXPECT_TRUE(pred::collinear(a.data(), b.data(), c.data()));
