@@ -222,6 +222,19 @@ TEST(Delaunay, RegressionTetgenAndVolumeAtScale1e200) {
   }
 }
 
+// The walk tries a tet's faces in the order of a direction heuristic (locate() in
+// mesher/delaunay.cpp). On kd-bfs cube points it needs about 8 orientation tests per point,
+// where the walk with a random first face needed 11.7 (docs/bench/README.md, measured before
+// the change at 100k-1M points, also what CGAL's walk needs with the same hints): the bound
+// between the two catches a return to unordered faces.
+TEST(Delaunay, OrderedWalkNeedsFewOrientationTests) {
+  const PointSet pts = generate_points(Distribution::cube, 20000, 1);
+  const DelaunayResult r = run(pts);
+  const double per_point = double(r.stats.orient_tests) / double(pts.size());
+  EXPECT_LT(per_point, 9.5);
+  EXPECT_GT(per_point, 4.0);
+}
+
 TEST(Delaunay, Deterministic) {
   const PointSet pts = generate_points(Distribution::spiral, 4000, 2);
   const auto a = run(pts), b = run(pts);

@@ -155,7 +155,8 @@ const char* kDefinitions = R"(## Definitions
   not the copies of the input into CGAL's or TetGen's types.
 - **Orientation tests per point** (Tables 8-14) = orientation tests made by point location,
   divided by n.
-  - kdmesh: `DelaunayStats::orient_tests` (the walk from the hint to the tet containing the point).
+  - kdmesh: `DelaunayStats::orient_tests` (the walk from the hint to the tet containing the point;
+    it tries a tet's faces in the order of a direction heuristic, not randomly as CGAL's walk).
   - CGAL: calls of the traits' `Orientation_3` inside `locate()`, counted in a separate child on
     counting traits (Epick with counting `Orientation_3` and `Side_of_oriented_sphere_3`).
     Plain Epick walks first with inexact double tests outside the traits (structural
