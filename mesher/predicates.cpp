@@ -128,7 +128,8 @@ bool scale_to_int64(const double* d, int n, std::int64_t* out) {
   return true;
 }
 
-/// The 12 (or 9) exact differences of rows p[1..] (p[0] for orient3d) against `base`.
+/// rows[i] - base for nrows <= 4 rows, as integers of one scale; false when any difference is
+/// inexact or the scale does not fit (see scale_to_int64).
 bool int_rows(const double* const* rows, int nrows, const double* base, std::int64_t* out) {
   double d[12];
   for (int i = 0; i < nrows; ++i)

@@ -1,6 +1,6 @@
 // kdmesh — fixed-width two's-complement integers of N 64-bit limbs, for the exact stage of the
-// geometric predicates (mesher/predicates.cpp). No allocation, no branches on limb values
-// except signs; the widths are chosen by the caller so that nothing can overflow.
+// geometric predicates (mesher/predicates.cpp). No allocation; the caller chooses the widths
+// so that no sum or product can overflow (the bounds are derived there).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
 #include <cstdint>
@@ -38,17 +38,6 @@ template <int N>
   return r;
 }
 
-/// Sign extension to M >= N limbs.
-template <int M, int N>
-[[gnu::always_inline]] inline Int<M> widen(const Int<N>& a) {
-  static_assert(M >= N);
-  Int<M> r;
-  const std::uint64_t fill = negative(a) ? ~std::uint64_t(0) : 0;
-  for (int i = 0; i < N; ++i) r.w[i] = a.w[i];
-  for (int i = N; i < M; ++i) r.w[i] = fill;
-  return r;
-}
-
 template <int N>
 [[gnu::always_inline]] inline Int<N> add(const Int<N>& a, const Int<N>& b) {
   Int<N> r;
@@ -66,7 +55,7 @@ template <int N>
   return add(a, neg(b));
 }
 
-/// The full product, A + B limbs (exact: |a b| < 2^(64(A+B) - 2) always holds).
+/// The full product, A + B limbs (exact: |a b| <= 2^(64(A+B) - 2) always holds).
 template <int A, int B>
 [[gnu::always_inline]] inline Int<A + B> mul(const Int<A>& a, const Int<B>& b) {
   const bool na = negative(a), nb = negative(b);
