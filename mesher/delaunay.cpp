@@ -416,9 +416,29 @@ class Kernel {
     return pred::insphere_perturbed(P(v[0]), P(v[1]), P(v[2]), P(v[3]), p) > 0;
   }
 
+  /// in_conflict() for two tets, the finite ones' float filter evaluated in one SSE2 pass.
+  [[gnu::always_inline]] void in_conflict2(std::uint32_t n0, std::uint32_t n1, const double* p,
+                                           bool& c0, bool& c1) const {
+    const std::uint32_t* v = &T_[8 * std::size_t(n0)];
+    const std::uint32_t* w = &T_[8 * std::size_t(n1)];
+    if ((v[0] | v[1] | v[2] | v[3]) == kInf || (w[0] | w[1] | w[2] | w[3]) == kInf) {
+      c0 = in_conflict(n0, p);
+      c1 = in_conflict(n1, p);
+      return;
+    }
+    const double* a[4] = {P(v[0]), P(v[1]), P(v[2]), P(v[3])};
+    const double* b[4] = {P(w[0]), P(w[1]), P(w[2]), P(w[3])};
+    int s[2];
+    pred::insphere_filter2(a, b, p, s);
+    c0 = (s[0] != 0 ? s[0] : pred::insphere_perturbed(a[0], a[1], a[2], a[3], p)) > 0;
+    c1 = (s[1] != 0 ? s[1] : pred::insphere_perturbed(b[0], b[1], b[2], b[3], p)) > 0;
+  }
+
   /// Collects the tets in conflict with p, breadth-first from `base`. A parallel worker gives
   /// up (false, marks cleared) on a conflicting tet it does not own, or when its slot range
-  /// cannot hold the new tets.
+  /// cannot hold the new tets. Unvisited neighbours are tested two at a time (in_conflict2):
+  /// one waits for the next, and both are then recorded in the order they were met, so the
+  /// cavity and its boundary come out exactly as with one test at a time.
   [[gnu::always_inline]] bool grow_cavity(std::uint32_t base, const double* p) {
     std::uint8_t* const state = state_;
     const std::uint32_t* const T = T_;
@@ -426,20 +446,48 @@ class Kernel {
     touched_.clear();
     cavity_.push(base);
     state[base] = kInCavity;
-    for (std::size_t i = 0; i < cavity_.size(); ++i) {
-      const std::uint32_t c = cavity_[i];
+    // Records a tested tet; false when a parallel worker must give up.
+    auto record = [&](std::uint32_t n, bool conflict) {
+      if (!conflict) {
+        touched_.push(n);
+        return true;
+      }
+      if constexpr (kParallel)
+        if (!owns_tet(n)) {
+          state[n] = kUnvisited;
+          return false;
+        }
+      state[n] = kInCavity;
+      cavity_.push(n);
+      return true;
+    };
+    std::uint32_t pending = kNone;  // met, marked visited, not tested yet
+    for (std::size_t i = 0;;) {
+      if (i == cavity_.size()) {
+        if (pending == kNone) break;
+        const std::uint32_t n = pending;
+        pending = kNone;
+        if (!record(n, in_conflict(n, p))) return abandon_cavity();
+        continue;  // n may have grown the cavity
+      }
+      const std::uint32_t c = cavity_[i++];
       for (int f = 0; f < 4; ++f) {
         const std::uint32_t n = T[8 * std::size_t(c) + 4 + f] >> 2;
         if (state[n] != kUnvisited) continue;
-        if (in_conflict(n, p)) {
-          if constexpr (kParallel)
-            if (!owns_tet(n)) return abandon_cavity();
-          state[n] = kInCavity;
-          cavity_.push(n);
-        } else {
-          state[n] = kOutside;
-          touched_.push(n);
+        state[n] = kOutside;  // visited; record() sets kInCavity if in conflict
+        if (pending == kNone) {
+          pending = n;
+          continue;
         }
+        const std::uint32_t m = pending;
+        pending = kNone;
+        bool cm, cn;
+        in_conflict2(m, n, p, cm, cn);
+        if (!record(m, cm)) {
+          state[n] = kUnvisited;
+          return abandon_cavity();
+        }
+        if (!record(n, cn)) return abandon_cavity();
       }
     }
     if constexpr (kParallel) {

@@ -25,6 +25,9 @@
 #pragma once
 #include <cmath>
 #include <cstdint>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace kdmesh::pred {
 
@@ -195,6 +198,61 @@ inline int insphere(const double* a, const double* b, const double* c, const dou
   // Undecided: the permanent bound is tighter (it follows anisotropic rows, e.g. points near
   // a line, where sqrt(Q) overestimates), then the exact evaluation.
   return insphere_permanent(a, b, c, d, e);
+}
+
+/// The lift-bound stage of insphere() for two tets at once against one point e, lane by lane
+/// in SSE2 (t0 and t1: the tets' four vertices each). out[l] is insphere()'s sign where the
+/// lift bound decides it, and 0 where insphere() would go on to the permanent filter (the
+/// caller then calls it). Each lane performs exactly the IEEE operations of insphere_eval<false>
+/// and insphere() in the same order (packed SSE2 arithmetic rounds like scalar SSE2; no FMA), so
+/// every decided sign is the one insphere() returns.
+[[gnu::always_inline]] inline void insphere_filter2(const double* const* t0, const double* const* t1,
+                                                    const double* e, int out[2]) {
+#if defined(__SSE2__)
+  const __m128d ex = _mm_set1_pd(e[0]), ey = _mm_set1_pd(e[1]), ez = _mm_set1_pd(e[2]);
+  auto row = [&](int v, int k, __m128d ek) { return _mm_sub_pd(_mm_set_pd(t1[v][k], t0[v][k]), ek); };
+  const __m128d aex = row(0, 0, ex), aey = row(0, 1, ey), aez = row(0, 2, ez);
+  const __m128d bex = row(1, 0, ex), bey = row(1, 1, ey), bez = row(1, 2, ez);
+  const __m128d cex = row(2, 0, ex), cey = row(2, 1, ey), cez = row(2, 2, ez);
+  const __m128d dex = row(3, 0, ex), dey = row(3, 1, ey), dez = row(3, 2, ez);
+  auto mul = _mm_mul_pd;
+  auto sub = _mm_sub_pd;
+  auto add = _mm_add_pd;
+  const __m128d ab = sub(mul(aex, bey), mul(bex, aey));
+  const __m128d bc = sub(mul(bex, cey), mul(cex, bey));
+  const __m128d cd = sub(mul(cex, dey), mul(dex, cey));
+  const __m128d da = sub(mul(dex, aey), mul(aex, dey));
+  const __m128d ac = sub(mul(aex, cey), mul(cex, aey));
+  const __m128d bd = sub(mul(bex, dey), mul(dex, bey));
+  const __m128d abc = add(sub(mul(aez, bc), mul(bez, ac)), mul(cez, ab));
+  const __m128d bcd = add(sub(mul(bez, cd), mul(cez, bd)), mul(dez, bc));
+  const __m128d cda = add(add(mul(cez, da), mul(dez, ac)), mul(aez, cd));
+  const __m128d dab = add(add(mul(dez, ab), mul(aez, bd)), mul(bez, da));
+  const __m128d alift = add(add(mul(aex, aex), mul(aey, aey)), mul(aez, aez));
+  const __m128d blift = add(add(mul(bex, bex), mul(bey, bey)), mul(bez, bez));
+  const __m128d clift = add(add(mul(cex, cex), mul(cey, cey)), mul(cez, cez));
+  const __m128d dlift = add(add(mul(dex, dex), mul(dey, dey)), mul(dez, dez));
+  const __m128d det = add(sub(mul(dlift, abc), mul(clift, dab)), sub(mul(blift, cda), mul(alift, bcd)));
+  // _mm_max_pd(x, y) is x > y ? x : y and _mm_min_pd(x, y) is x < y ? x : y, as max2 and min2.
+  const __m128d lmax = _mm_max_pd(_mm_max_pd(alift, blift), _mm_max_pd(clift, dlift));
+  const __m128d lmin = _mm_min_pd(_mm_min_pd(alift, blift), _mm_min_pd(clift, dlift));
+  const __m128d q = mul(mul(mul(alift, blift), mul(clift, dlift)), lmax);
+  const __m128d in_range =
+      _mm_and_pd(_mm_cmpge_pd(lmin, _mm_set1_pd(1e-50)), _mm_cmple_pd(lmax, _mm_set1_pd(1e60)));
+  const __m128d decided =
+      _mm_and_pd(in_range, _mm_cmpgt_pd(mul(det, det), mul(_mm_set1_pd(kInsphereLiftStatic), q)));
+  const int dm = _mm_movemask_pd(decided), pm = _mm_movemask_pd(_mm_cmpgt_pd(det, _mm_setzero_pd()));
+  for (int l = 0; l < 2; ++l)
+    out[l] = (dm >> l & 1) ? ((pm >> l & 1) ? -1 : 1) : 0;  // Shewchuk's sign is opposite
+#else
+  const double* const* t[2] = {t0, t1};
+  for (int l = 0; l < 2; ++l) {
+    const detail::Eval r = detail::insphere_eval<false>(t[l][0], t[l][1], t[l][2], t[l][3], e);
+    const bool ok = r.lift_min >= 1e-50 && r.lift_max <= 1e60 &&
+                    r.det * r.det > kInsphereLiftStatic * r.lift_q;
+    out[l] = ok ? (r.det > 0 ? -1 : 1) : 0;
+  }
+#endif
 }
 
 /// The tie-break of insphere_perturbed, for e exactly on the sphere (out of line: rare).

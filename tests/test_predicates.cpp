@@ -286,6 +286,52 @@ TEST(Predicates, ExactIntegerStageAtItsLimits) {
             oracle_orient(tenth, huge, x, y));
 }
 
+// The two-lane filter of the cavity search (insphere_filter2) on the inputs of the scalar
+// filter's test above: every sign it decides equals the oracle's, in both lanes, whichever lane
+// a tet is in; and on well-shaped tets it decides nearly everything (a filter that always
+// answered 0 would be correct but would make the kernel slow without any test failing).
+TEST(Predicates, TwoLaneInsphereFilterAgreesWithOracle) {
+  Rng rng(23);
+  int decided = 0, total = 0;
+  for (int iter = 0; iter < 3000; ++iter) {
+    P3 t[2][4], e;
+    for (auto& tet : t)
+      for (auto& q : tet)
+        for (double& x : q) x = rng.uniform(-1, 1);
+    for (double& x : e) x = rng.uniform(-1, 1);
+    const int mode = iter % 4;
+    if (mode == 1)  // e a rounding step from a vertex of the first tet: undecidable by floats
+      for (int k = 0; k < 3; ++k) e[k] = std::nextafter(t[0][2][k], 2.0);
+    if (mode == 2)  // exact ties: small integer grid
+      for (auto& tet : t)
+        for (auto& q : tet)
+          for (double& x : q) x = double(rng.below(3));
+    if (mode == 3)  // far out of the filter's range in the second tet
+      for (auto& q : t[1])
+        for (double& x : q) x *= 1e-40;
+    const double* a[4];
+    const double* b[4];
+    for (int i = 0; i < 4; ++i) {
+      a[i] = t[0][i].data();
+      b[i] = t[1][i].data();
+    }
+    int s[2], r[2];
+    pred::insphere_filter2(a, b, e.data(), s);
+    pred::insphere_filter2(b, a, e.data(), r);
+    EXPECT_EQ(s[0], r[1]);
+    EXPECT_EQ(s[1], r[0]);
+    for (int l = 0; l < 2; ++l) {
+      const P3* q = t[l];
+      ++total;
+      if (s[l] == 0) continue;
+      ++decided;
+      ASSERT_EQ(s[l], oracle_insphere(q[0], q[1], q[2], q[3], e)) << "iter " << iter << " lane " << l;
+    }
+  }
+  EXPECT_GT(decided, total / 2);
+  EXPECT_LT(decided, total);  // the undecidable modes did reach the fallback
+}
+
 TEST(Predicates, Collinear) {
   const P3 a{0, 0, 0}, b{1, 2, 3}, c{2, 4, 6}, d{2, 4, 6.000000000000001};
   EXPECT_TRUE(pred::collinear(a.data(), b.data(), c.data()));
