@@ -335,6 +335,9 @@ class Kernel {
     return t;
   }
 
+  /// Steps of locate() with ordered faces before its first face becomes random.
+  static constexpr std::size_t kOrderedSteps = 1024;
+
   /// Visibility walk: from `t`, cross any face that separates t from p, until p is in the
   /// closed tet (finite result) or beyond a hull face (infinite result, in conflict with p).
   /// Faces are tried in a heuristic order (below). A visibility walk terminates on a Delaunay
@@ -342,7 +345,6 @@ class Kernel {
   /// after kOrderedSteps steps the first face becomes random, which terminates on any
   /// triangulation (with probability 1). A parallel worker returns kNone when the walk would
   /// enter a tet it does not own.
-  static constexpr std::size_t kOrderedSteps = 1024;
   [[gnu::always_inline]] std::uint32_t locate(const double* p, std::uint32_t t) {
     if (is_infinite(t)) {
       int i = 0;

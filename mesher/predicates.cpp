@@ -191,7 +191,6 @@ int detail::insphere_int(const double* a, const double* b, const double* c, cons
   return -wide::sign(det);  // Shewchuk's sign is opposite to kdmesh's orientation convention
 }
 
-
 int orient3d_permanent(const double* a, const double* b, const double* c, const double* d) {
   const detail::Eval r = detail::orient3d_eval<true>(a, b, c, d);
   const double bound = kOrient3dBound * r.permanent;
