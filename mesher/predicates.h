@@ -188,15 +188,24 @@ template <bool kPermanent>
   return orient3d_exact(a, b, c, d);
 }
 
-inline int insphere(const double* a, const double* b, const double* c, const double* d,
-                    const double* e) {
-  const detail::Eval r = detail::insphere_eval<false>(a, b, c, d, e);
-  // Lift bound (see kInsphereLiftStatic): the sign is proven if det^2 > kInsphereLiftStatic Q.
-  if (!(r.lift_min >= 1e-50 && r.lift_max <= 1e60)) return insphere_permanent(a, b, c, d, e);
+namespace detail {
+/// The lift bound's verdict on insphere_eval<false>'s result (see kInsphereLiftStatic): the
+/// sign in kdmesh's convention when det^2 > kInsphereLiftStatic Q proves it, 0 when it does
+/// not or when the lifts are outside the bound's range.
+[[gnu::always_inline]] inline int insphere_lift_sign(const Eval& r) {
+  if (!(r.lift_min >= 1e-50 && r.lift_max <= 1e60)) return 0;
   if (r.det * r.det > kInsphereLiftStatic * r.lift_q)
     return r.det > 0 ? -1 : 1;  // Shewchuk's sign is opposite to kdmesh's convention
-  // Undecided: the permanent bound is tighter (it follows anisotropic rows, e.g. points near
-  // a line, where sqrt(Q) overestimates), then the exact evaluation.
+  return 0;
+}
+}  // namespace detail
+
+inline int insphere(const double* a, const double* b, const double* c, const double* d,
+                    const double* e) {
+  const int s = detail::insphere_lift_sign(detail::insphere_eval<false>(a, b, c, d, e));
+  if (s != 0) return s;
+  // Undecided or out of range: the permanent bound is tighter (it follows anisotropic rows,
+  // e.g. points near a line, where sqrt(Q) overestimates), then the exact evaluation.
   return insphere_permanent(a, b, c, d, e);
 }
 
@@ -246,12 +255,8 @@ inline int insphere(const double* a, const double* b, const double* c, const dou
     out[l] = (dm >> l & 1) ? ((pm >> l & 1) ? -1 : 1) : 0;  // Shewchuk's sign is opposite
 #else
   const double* const* t[2] = {t0, t1};
-  for (int l = 0; l < 2; ++l) {
-    const detail::Eval r = detail::insphere_eval<false>(t[l][0], t[l][1], t[l][2], t[l][3], e);
-    const bool ok = r.lift_min >= 1e-50 && r.lift_max <= 1e60 &&
-                    r.det * r.det > kInsphereLiftStatic * r.lift_q;
-    out[l] = ok ? (r.det > 0 ? -1 : 1) : 0;
-  }
+  for (int l = 0; l < 2; ++l)
+    out[l] = detail::insphere_lift_sign(detail::insphere_eval<false>(t[l][0], t[l][1], t[l][2], t[l][3], e));
 #endif
 }
 
