@@ -43,12 +43,14 @@ constexpr std::size_t kMaxPoints = std::size_t(1) << 27;
 
 enum : std::uint8_t { kUnvisited = 0, kInCavity = 1, kOutside = 2 };
 
-/// kEdgeSlots[s][j]: the two slots of a tet other than s and j (s != j).
-constexpr std::uint8_t kEdgeSlots[4][4][2] = {
-    {{0, 0}, {2, 3}, {1, 3}, {1, 2}},
-    {{2, 3}, {0, 0}, {0, 3}, {0, 2}},
-    {{1, 3}, {0, 3}, {0, 0}, {0, 1}},
-    {{1, 2}, {0, 2}, {0, 1}, {0, 0}},
+/// kFaceEdges[s][k] = {j, e0, e1}: for k = 0..2, the slots j != s in increasing order, and the
+/// two slots other than s and j. In a new tet whose slot s holds p, face j contains p and the
+/// edge between slots e0 and e1.
+constexpr std::uint8_t kFaceEdges[4][3][3] = {
+    {{1, 2, 3}, {2, 1, 3}, {3, 1, 2}},
+    {{0, 2, 3}, {2, 0, 3}, {3, 0, 2}},
+    {{0, 1, 3}, {1, 0, 3}, {3, 0, 1}},
+    {{0, 1, 2}, {1, 0, 2}, {2, 0, 1}},
 };
 
 /// A growable array of trivially copyable values for the insertion loop. Unlike
@@ -96,42 +98,55 @@ class Stack {
 };
 
 /// Open-addressing map from an undirected edge to the new-tet face that holds it, reused
-/// across insertions (only the used slots are cleared).
+/// across insertions without clearing: each key carries the insertion's generation in its top
+/// bits (vertex ids are below 2^27, so bits 59-63 are free), and a slot whose generation is
+/// older than the current one (a key below the current tag) is empty. The table is cleared
+/// only when the generation wraps, every 31 insertions, and then only as far as it was used.
 class EdgeMap {
  public:
   void reset(std::size_t expected_edges) {
-    for (std::uint32_t s : used_) keys_[s] = kEmpty;
-    used_.clear();
     std::size_t cap = 64;
     while (cap < 2 * expected_edges) cap <<= 1;
     if (cap > keys_.size()) {
-      keys_.assign(cap, kEmpty);
+      keys_.assign(cap, 0);  // generation 0 is never current
       vals_.resize(cap);
+      dirty_ = 0;
+      gen_ = 0;
     }
-    mask_ = keys_.size() - 1;
+    if (++gen_ == 32) {
+      std::fill(keys_.begin(), keys_.begin() + std::ptrdiff_t(dirty_), 0);
+      dirty_ = 0;
+      gen_ = 1;
+    }
+    mask_ = cap - 1;
+    dirty_ = std::max(dirty_, cap);
+    tag_ = std::uint64_t(gen_) << kGenShift;
   }
   /// Returns the face stored for edge (a,b), or records `face` and returns kNone. Each edge of
   /// a cavity boundary is seen exactly twice, so a matched entry is simply never asked again.
   [[gnu::always_inline]] std::uint32_t match(std::uint32_t a, std::uint32_t b, std::uint32_t face) {
     if (a > b) std::swap(a, b);
-    const std::uint64_t key = (std::uint64_t(a) << 32) | b;
+    const std::uint64_t key = (std::uint64_t(a) << 32 | b) | tag_;  // a < 2^27: below the tag
     std::size_t s = (key * 0x9E3779B97F4A7C15ULL) >> 40 & mask_;
-    while (keys_[s] != kEmpty) {
+    while (keys_[s] >= tag_) {  // older generations are below the current tag
       if (keys_[s] == key) return vals_[s];
       s = (s + 1) & mask_;
     }
     keys_[s] = key;
     vals_[s] = face;
-    used_.push(std::uint32_t(s));
     return kNone;
   }
 
  private:
-  static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
+  static constexpr int kGenShift = 59;
+  static_assert((std::uint64_t(kMaxPoints) << 32) <= (std::uint64_t(1) << kGenShift),
+                "vertex ids must stay below the generation tag");
   std::vector<std::uint64_t> keys_;
   std::vector<std::uint32_t> vals_;
-  Stack<std::uint32_t> used_;
   std::size_t mask_ = 0;
+  std::size_t dirty_ = 0;  // keys_[0, dirty_) may hold entries of past generations
+  std::uint64_t tag_ = 0;  // gen_ << kGenShift
+  std::uint32_t gen_ = 0;
 };
 
 struct BoundaryFace {
@@ -144,15 +159,31 @@ struct BoundaryFace {
 struct Store {
   const double* xyz = nullptr;     // coordinates in the kernel's numbering
   std::size_t n = 0;               // points
-  std::vector<std::uint32_t> T;    // tet records, 8 per tet
+  std::vector<std::uint32_t> T;    // tet records, 8 per tet; those at >= used are spare slots
   std::vector<std::uint8_t> state;  // per tet: mark of the current cavity search
   std::vector<std::uint32_t> v2t;  // per vertex: a tet that contains it; entries >= n are spares
+  std::size_t used = 0;            // tets [0, used) are in use (alive or on a free list)
 
   const double* P(std::uint32_t v) const { return xyz + 3 * std::size_t(v); }
-  std::size_t num_tets() const { return T.size() / 8; }
+  std::size_t num_tets() const { return used; }
+  /// Appends `count` slots, all in use (alive or on a free list) from now on.
   void add_slots(std::size_t count) {
+    used += count;
+    if (8 * used > T.size()) {
+      T.resize(8 * used, kNone);
+      state.resize(used, kUnvisited);
+    }
+  }
+  /// Room for at least `count` more slots past `used`, which is unchanged: appending a tet is
+  /// then a counter increment, not a vector resize per tet (2.7% of the instructions).
+  void spare_slots(std::size_t count) {
     T.resize(T.size() + 8 * count, kNone);
     state.resize(T.size() / 8, kUnvisited);
+  }
+  /// Drops the spare slots.
+  void trim() {
+    T.resize(8 * used);
+    state.resize(used);
   }
 };
 
@@ -326,13 +357,17 @@ class Kernel {
     } else if constexpr (kParallel) {
       t = terr_.next++;  // room checked in grow_cavity()
     } else {
-      t = std::uint32_t(s_.num_tets());
-      s_.T.resize(s_.T.size() + 8, kNone);
-      s_.state.push_back(kUnvisited);
-      refresh();
+      if (8 * s_.used == s_.T.size()) [[unlikely]]
+        grow_slots();
+      t = std::uint32_t(s_.used++);
     }
     std::memcpy(&T_[8 * std::size_t(t)], v.data(), sizeof(v));
     return t;
+  }
+
+  [[gnu::noinline]] void grow_slots() {
+    s_.spare_slots(std::max<std::size_t>(1024, s_.used / 64));
+    refresh();
   }
 
   /// Steps of locate() with ordered faces before its first face becomes random.
@@ -354,7 +389,7 @@ class Kernel {
         if (!owns_tet(t)) return kNone;
     }
     std::uint32_t prev = kNone;
-    const std::size_t limit = 16 + s_.T.size() / 2;
+    const std::size_t limit = 16 + 4 * s_.used;
     for (std::size_t steps = 0; steps < limit; ++steps) {
       const std::uint32_t* rec = &T_[8 * std::size_t(t)];
       const double* q[4] = {P(rec[0]), P(rec[1]), P(rec[2]), P(rec[3])};
@@ -537,10 +572,10 @@ class Kernel {
       adj(t, b.slot) = b.outer;
       adj_of(b.outer) = 4 * t + b.slot;
       // The other 3 faces contain p and one edge of the boundary face: pair them by edge.
-      for (std::uint32_t j = 0; j < 4; ++j) {
-        if (j == b.slot) continue;
-        const std::uint8_t* e = kEdgeSlots[b.slot][j];  // the two slots other than j and p's
-        const std::uint32_t other = edges_.match(b.v[e[0]], b.v[e[1]], 4 * t + j);
+      for (int k = 0; k < 3; ++k) {
+        const std::uint8_t* e = kFaceEdges[b.slot][k];
+        const std::uint32_t j = e[0];
+        const std::uint32_t other = edges_.match(b.v[e[1]], b.v[e[2]], 4 * t + j);
         if (other != kNone) {
           adj(t, j) = other;
           adj_of(other) = 4 * t + j;
@@ -631,6 +666,7 @@ void compact_from_end(Store& s) {
 
 /// Moves the (compacted) records out, with vertices renumbered to the caller's ids.
 Triangulation release(Store& s, const std::uint32_t* ids, bool holes_everywhere = false) {
+  s.trim();
   if (holes_everywhere)
     compact_from_end(s);
   else
@@ -1017,6 +1053,7 @@ void delaunay_insert(Triangulation& tri, const PointSet& points,
   s.n = n;
   s.v2t.assign(n + 1, kNone);
   s.T = std::move(tri.data);
+  s.used = s.T.size() / 8;
   s.T.reserve(s.T.size() + 8 * (ids.size() * 15 / 2 + 64));
   s.state.assign(s.num_tets(), kUnvisited);
   for (std::size_t t = 0; t < s.num_tets(); ++t)

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "core/error.h"
@@ -95,6 +96,36 @@ TEST(Delaunay, IntegerLatticeIsValidOrderIndependentAndMatchesCgal) {
   EXPECT_TRUE(compare_tets(pts, tets, cg.tets).same_set());
   const ReferenceResult tg = tetgen_delaunay(pts);
   EXPECT_NEAR(total_volume(pts, tg.tets), 729.0, 1e-9);
+}
+
+// The fill pairs new faces through an edge table that is reused across insertions (entries of
+// older insertions are told apart by a generation tag, cleared every 31 insertions). Here one
+// insertion's cavity is far larger than all before it (the centre of a sphere of points:
+// every tet inside goes), so the table grows mid-run; then 200 small insertions follow, over
+// several generation wraps. A stale entry taken for a live one would link faces wrongly.
+TEST(Delaunay, EdgeTableSurvivesAGiantCavityAndGenerationWraps) {
+  PointSet pts;
+  Rng rng(11);
+  for (int i = 0; i < 600; ++i) {  // on the unit sphere (rounded: not exactly cospherical)
+    double x, y, z, r2;
+    do {
+      x = 2 * rng.uniform() - 1;
+      y = 2 * rng.uniform() - 1;
+      z = 2 * rng.uniform() - 1;
+      r2 = x * x + y * y + z * z;
+    } while (r2 < 0.01 || r2 > 1);
+    const double r = std::sqrt(r2);
+    pts.push_back(x / r, y / r, z / r);
+  }
+  pts.push_back(0, 0, 0);  // rank 600: its cavity is every tet
+  for (int i = 0; i < 200; ++i)
+    pts.push_back(0.5 * rng.uniform() - 0.25, 0.5 * rng.uniform() - 0.25, 0.5 * rng.uniform() - 0.25);
+  const auto r = delaunay(pts, make_order(pts, {OrderKind::input, 1, 0.125}));
+  EXPECT_EQ(r.stats.inserted, pts.size());
+  EXPECT_GT(r.stats.conflicts, 1000u);  // the centre's cavity alone
+  expect_valid(pts, r, "sphere, centre, then small cavities");
+  const ReferenceResult cg = cgal_delaunay(pts, nullptr);
+  EXPECT_TRUE(compare_tets(pts, canonical_tets(pts, r.tri), cg.tets).same_set());
 }
 
 // Inserting points into an existing triangulation (Steiner points) must give the Delaunay
