@@ -41,17 +41,10 @@ constexpr std::uint32_t kDead = 0xFFFFFFFEu;      // vertex 0 of a tet on the fr
 // 6.1-6.8 tets per point (docs/verification.md), so 2^27 points stay well inside.
 constexpr std::size_t kMaxPoints = std::size_t(1) << 27;
 
-enum : std::uint8_t { kUnvisited = 0, kInCavity = 1, kOutside = 2 };
-
-/// kFaceEdges[s][k] = {j, e0, e1}: for k = 0..2, the slots j != s in increasing order, and the
-/// two slots other than s and j. In a new tet whose slot s holds p, face j contains p and the
-/// edge between slots e0 and e1.
-constexpr std::uint8_t kFaceEdges[4][3][3] = {
-    {{1, 2, 3}, {2, 1, 3}, {3, 1, 2}},
-    {{0, 2, 3}, {2, 0, 3}, {3, 0, 2}},
-    {{0, 1, 3}, {1, 0, 3}, {3, 0, 1}},
-    {{0, 1, 2}, {1, 0, 2}, {2, 0, 1}},
-};
+/// A tet's mark in the current cavity search. A distinct type, not a char: a store through a
+/// char pointer may alias anything, and after each one the compiler would reload the kernel's
+/// arrays and stack pointers from memory.
+enum Mark : std::uint8_t { kUnvisited = 0, kInCavity = 1, kOutside = 2 };
 
 /// A growable array of trivially copyable values for the insertion loop. Unlike
 /// std::vector::push_back, whose inlining GCC gives up on once the kernel exists in two
@@ -149,10 +142,11 @@ class EdgeMap {
   std::uint32_t gen_ = 0;
 };
 
+/// A face of the cavity's boundary: the new tet on it is (w[0], w[1], w[2], p), positively
+/// oriented, so p is always in slot 3 and the face in slot 3 is the boundary face.
 struct BoundaryFace {
-  std::array<std::uint32_t, 4> v;  // vertices of the cavity tet, the face's opposite slot := p
-  std::uint32_t slot;              // the slot that now holds p
-  std::uint32_t outer;             // face reference 4*u+j of the tet outside the cavity
+  std::uint32_t w[3];
+  std::uint32_t outer;  // face reference 4*u+j of the tet outside the cavity
 };
 
 /// The triangulation under construction, shared by the kernel's workers (one when sequential).
@@ -160,7 +154,7 @@ struct Store {
   const double* xyz = nullptr;     // coordinates in the kernel's numbering
   std::size_t n = 0;               // points
   std::vector<std::uint32_t> T;    // tet records, 8 per tet; those at >= used are spare slots
-  std::vector<std::uint8_t> state;  // per tet: mark of the current cavity search
+  std::vector<Mark> state;  // per tet: mark of the current cavity search
   std::vector<std::uint32_t> v2t;  // per vertex: a tet that contains it; entries >= n are spares
   std::size_t used = 0;            // tets [0, used) are in use (alive or on a free list)
 
@@ -477,7 +471,7 @@ class Kernel {
   /// one waits for the next, and both are then recorded in the order they were met, so the
   /// cavity and its boundary come out exactly as with one test at a time.
   [[gnu::always_inline]] bool grow_cavity(std::uint32_t base, const double* p) {
-    std::uint8_t* const state = state_;
+    Mark* const state = state_;
     const std::uint32_t* const T = T_;
     cavity_.clear();
     touched_.clear();
@@ -543,19 +537,20 @@ class Kernel {
   }
 
   [[gnu::always_inline]] void fill_cavity(std::uint32_t pid) {
-    // 1. Record the boundary faces before any cavity slot is overwritten.
+    // 1. Record the boundary faces before any cavity slot is overwritten. Face f of cavity tet
+    //    (v0, v1, v2, v3) becomes the new tet with v_f replaced by p and the vertices permuted
+    //    by i -> i ^ (f ^ 3): an even permutation (the identity or two swaps), so the tet stays
+    //    positively oriented, that puts p in slot 3. Every new tet then has the same layout.
     boundary_.clear();
-    for (std::uint32_t c : cavity_)
+    for (std::uint32_t c : cavity_) {
+      const std::uint32_t* rec = &T_[8 * std::size_t(c)];
       for (std::uint32_t f = 0; f < 4; ++f) {
-        const std::uint32_t outer = adj(c, f);
+        const std::uint32_t outer = rec[4 + f];
         if (state_[outer >> 2] == kInCavity) continue;
-        BoundaryFace b;
-        std::memcpy(b.v.data(), &T_[8 * std::size_t(c)], sizeof(b.v));
-        b.v[f] = pid;
-        b.slot = f;
-        b.outer = outer;
-        boundary_.push(b);
+        const std::uint32_t x = f ^ 3;
+        boundary_.push(BoundaryFace{{rec[x], rec[1 ^ x], rec[2 ^ x]}, outer});
       }
+    }
     for (std::uint32_t t : touched_) state_[t] = kUnvisited;
     // 2. Dead cavity tets become free slots; new tets take them first.
     for (std::uint32_t c : cavity_) {
@@ -563,27 +558,28 @@ class Kernel {
       vert(c, 0) = kDead;
       free_.push(c);
     }
+    // 3. The new tets. Face 3 is the boundary face; face k < 3 contains p and the boundary
+    //    face's edge opposite w[k], shared with one other new tet: pair them by that edge.
     edges_.reset(boundary_.size() * 3 / 2 + 1);
     std::uint32_t t = kNone;
     std::uint32_t* const v2t = v2t_;
     const std::uint32_t spare = spare_;
     for (const BoundaryFace& b : boundary_) {
-      t = new_tet(b.v);
-      adj(t, b.slot) = b.outer;
-      adj_of(b.outer) = 4 * t + b.slot;
-      // The other 3 faces contain p and one edge of the boundary face: pair them by edge.
-      for (int k = 0; k < 3; ++k) {
-        const std::uint8_t* e = kFaceEdges[b.slot][k];
-        const std::uint32_t j = e[0];
-        const std::uint32_t other = edges_.match(b.v[e[1]], b.v[e[2]], 4 * t + j);
+      t = new_tet({b.w[0], b.w[1], b.w[2], pid});
+      adj(t, 3) = b.outer;
+      adj_of(b.outer) = 4 * t + 3;
+      auto link = [&](std::uint32_t k, std::uint32_t u, std::uint32_t w) {
+        const std::uint32_t other = edges_.match(u, w, 4 * t + k);
         if (other != kNone) {
-          adj(t, j) = other;
-          adj_of(other) = 4 * t + j;
+          adj(t, int(k)) = other;
+          adj_of(other) = 4 * t + k;
         }
-      }
-      // Branch-free: p's own entry is rewritten below with the last t anyway, and the infinite
-      // vertex (kInf > every id) lands in this worker's spare entry.
-      for (std::uint32_t i = 0; i < 4; ++i) v2t[std::min(b.v[i], spare)] = t;
+      };
+      link(0, b.w[1], b.w[2]);
+      link(1, b.w[0], b.w[2]);
+      link(2, b.w[0], b.w[1]);
+      // Branch-free: the infinite vertex (kInf > every id) lands in this worker's spare entry.
+      for (int k = 0; k < 3; ++k) v2t[std::min(b.w[k], spare)] = t;
     }
     v2t_[pid] = t;  // every new tet contains p
     last_ = t;
@@ -594,7 +590,7 @@ class Kernel {
   // The store's arrays, cached: reached through s_ they would be reloaded after every store to
   // the byte array state (a char store may alias anything). refresh() after they grow.
   std::uint32_t* T_ = nullptr;
-  std::uint8_t* state_ = nullptr;
+  Mark* state_ = nullptr;
   std::uint32_t* v2t_ = nullptr;
   const std::uint32_t* ids_;
   std::uint32_t spare_;
