@@ -568,7 +568,7 @@ class Kernel {
       t = new_tet({b.w[0], b.w[1], b.w[2], pid});
       adj(t, 3) = b.outer;
       adj_of(b.outer) = 4 * t + 3;
-      auto link = [&](std::uint32_t k, std::uint32_t u, std::uint32_t w) {
+      auto link = [&](std::uint32_t k, std::uint32_t u, std::uint32_t w) __attribute__((always_inline)) {
         const std::uint32_t other = edges_.match(u, w, 4 * t + k);
         if (other != kNone) {
           adj(t, int(k)) = other;
