@@ -58,6 +58,12 @@ class Stack {
       grow();
     *end_++ = x;
   }
+  /// Room for `count` more values: push_unchecked() may then be called that many times.
+  void reserve_more(std::size_t count) {
+    if (std::size_t(cap_ - end_) < count) [[unlikely]]
+      grow(count);
+  }
+  [[gnu::always_inline]] void push_unchecked(const T& x) { *end_++ = x; }
   void clear() { end_ = data_; }
   bool empty() const { return end_ == data_; }
   std::size_t size() const { return std::size_t(end_ - data_); }
@@ -77,9 +83,9 @@ class Stack {
   }
 
  private:
-  [[gnu::noinline]] void grow() {
+  [[gnu::noinline]] void grow(std::size_t more = 1) {
     const std::size_t n = size();
-    buf_.resize(std::max<std::size_t>(64, 2 * buf_.size()));
+    buf_.resize(std::max<std::size_t>({64, 2 * buf_.size(), n + more}));
     data_ = buf_.data();
     end_ = data_ + n;
     cap_ = data_ + buf_.size();
@@ -553,6 +559,7 @@ class Kernel {
     //    by i -> i ^ (f ^ 3): an even permutation (the identity or two swaps), so the tet stays
     //    positively oriented, that puts p in slot 3. Every new tet then has the same layout.
     boundary_.clear();
+    boundary_.reserve_more(4 * cavity_.size());
     for (std::uint32_t c : cavity_) {
       const std::uint32_t* rec = &T_[8 * std::size_t(c)];
       for (std::uint32_t f = 0; f < 4; ++f) {
@@ -560,14 +567,15 @@ class Kernel {
         if (state_[outer >> 2] == kInCavity) continue;
         state_[outer >> 2] = kUnvisited;  // it was tested from this face: kOutside
         const std::uint32_t x = f ^ 3;
-        boundary_.push(BoundaryFace{{rec[x], rec[1 ^ x], rec[2 ^ x]}, outer});
+        boundary_.push_unchecked(BoundaryFace{{rec[x], rec[1 ^ x], rec[2 ^ x]}, outer});
       }
     }
     // 2. Dead cavity tets become free slots; new tets take them first.
+    free_.reserve_more(cavity_.size());
     for (std::uint32_t c : cavity_) {
       state_[c] = kUnvisited;
       vert(c, 0) = kDead;
-      free_.push(c);
+      free_.push_unchecked(c);
     }
     // 3. The new tets. Face 3 is the boundary face; face k < 3 contains p and the boundary
     //    face's edge opposite w[k], shared with one other new tet: pair them by that edge.
