@@ -46,6 +46,15 @@ constexpr std::size_t kMaxPoints = std::size_t(1) << 27;
 /// arrays and stack pointers from memory.
 enum Mark : std::uint8_t { kUnvisited = 0, kInCavity = 1, kOutside = 2 };
 
+/// Hides a value from the optimiser, so that selects on it stay selects (cmov) and are not
+/// turned back into branches: for coin-toss conditions, where a branch is mispredicted about
+/// half the time (each ~15-20 cycles).
+template <class T>
+[[gnu::always_inline]] inline T opaque(T x) {
+  asm("" : "+r"(x));
+  return x;
+}
+
 /// A growable array of trivially copyable values for the insertion loop. Unlike
 /// std::vector::push_back, whose inlining GCC gives up on once the kernel exists in two
 /// instantiations (+8% instructions per point, measured with callgrind), push() is always
@@ -64,6 +73,8 @@ class Stack {
       grow(count);
   }
   [[gnu::always_inline]] void push_unchecked(const T& x) { *end_++ = x; }
+  /// After writing values in place past end() (within reserved room): the new end.
+  void set_end(T* e) { end_ = e; }
   void clear() { end_ = data_; }
   bool empty() const { return end_ == data_; }
   std::size_t size() const { return std::size_t(end_ - data_); }
@@ -105,7 +116,7 @@ class EdgeMap {
  public:
   void reset(std::size_t expected_edges) {
     std::size_t cap = 64;
-    while (cap < 2 * expected_edges) cap <<= 1;
+    while (cap < 4 * expected_edges) cap <<= 1;  // load <= 1/4: few collisions (a branch each)
     if (cap > keys_.size()) {
       keys_.assign(cap, 0);  // generation 0 is never current
       vals_.resize(cap);
@@ -123,17 +134,23 @@ class EdgeMap {
   }
   /// Returns the face stored for edge (a,b), or records `face` and returns kNone. Each edge of
   /// a cavity boundary is seen exactly twice, so a matched entry is simply never asked again.
+  /// Whether the edge is new or seen is a coin toss, so that choice is made without a branch
+  /// (a mispredicted branch costs more than the stores it saves); only a collision branches.
   [[gnu::always_inline]] std::uint32_t match(std::uint32_t a, std::uint32_t b, std::uint32_t face) {
-    if (a > b) std::swap(a, b);
-    const std::uint64_t key = (std::uint64_t(a) << 32 | b) | tag_;  // a < 2^27: below the tag
+    const std::uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
+    const std::uint64_t key = (std::uint64_t(lo) << 32 | hi) | tag_;  // lo < 2^27: below the tag
     std::size_t s = (key * 0x9E3779B97F4A7C15ULL) >> 40 & mask_;
-    while (keys_[s] >= tag_) {  // older generations are below the current tag
-      if (keys_[s] == key) return vals_[s];
+    std::uint64_t k = keys_[s];
+    // Older generations are below the current tag: empty. Probe on a collision only (rare).
+    while (opaque(std::uint32_t(k >= tag_) & std::uint32_t(k != key))) {
       s = (s + 1) & mask_;
+      k = keys_[s];
     }
+    // Unconditional stores: a seen edge is never asked again, so its value may be overwritten.
+    const std::uint32_t old = vals_[s];
     keys_[s] = key;
     vals_[s] = face;
-    return kNone;
+    return old | opaque(0u - std::uint32_t(k != key));  // kNone (all ones) if the edge is new
   }
 
  private:
@@ -404,14 +421,16 @@ class Kernel {
         const double uz = 4 * p[2] - (q[0][2] + q[1][2] + q[2][2] + q[3][2]);
         double k[4];
         for (int i = 0; i < 4; ++i) k[i] = q[i][0] * ux + q[i][1] * uy + q[i][2] * uz;
-        auto cas = [&](int a, int b) {  // sorting network step: keys ascending
-          const bool sw = k[b] < k[a];
+        // Sorting network step, keys ascending, without branches (the comparisons are coin
+        // tosses): min/max for the keys, a masked exchange for the faces.
+        auto cas = [&](int a, int b) {
+          const std::uint32_t swap = opaque(0u - std::uint32_t(k[b] < k[a]));  // all ones if so
           const double ka = k[a], kb = k[b];
-          const std::uint32_t oa = ord[a], ob = ord[b];
-          k[a] = sw ? kb : ka;
-          k[b] = sw ? ka : kb;
-          ord[a] = sw ? ob : oa;
-          ord[b] = sw ? oa : ob;
+          k[a] = kb < ka ? kb : ka;
+          k[b] = kb < ka ? ka : kb;
+          const std::uint32_t x = (ord[a] ^ ord[b]) & swap;
+          ord[a] ^= x;
+          ord[b] ^= x;
         };
         cas(0, 1);
         cas(2, 3);
@@ -469,8 +488,12 @@ class Kernel {
     const double* b[4] = {P(w[0]), P(w[1]), P(w[2]), P(w[3])};
     int s[2];
     pred::insphere_filter2(a, b, p, s);
-    c0 = s[0] != 0 ? s[0] > 0 : undecided_conflict(a, p);
-    c1 = s[1] != 0 ? s[1] > 0 : undecided_conflict(b, p);
+    if ((s[0] == 0) | (s[1] == 0)) [[unlikely]] {
+      if (s[0] == 0) s[0] = undecided_conflict(a, p) ? 1 : -1;
+      if (s[1] == 0) s[1] = undecided_conflict(b, p) ? 1 : -1;
+    }
+    c0 = s[0] > 0;
+    c1 = s[1] > 0;
   }
 
   /// The perturbed insphere where the two-lane filter gave no sign (rare). Out of line: GCC
@@ -482,9 +505,9 @@ class Kernel {
 
   /// Collects the tets in conflict with p, breadth-first from `base`. A parallel worker gives
   /// up (false, marks cleared) on a conflicting tet it does not own, or when its slot range
-  /// cannot hold the new tets. Unvisited neighbours are tested two at a time (in_conflict2):
-  /// one waits for the next, and both are then recorded in the order they were met, so the
-  /// cavity and its boundary come out exactly as with one test at a time.
+  /// cannot hold the new tets. Unvisited neighbours are tested two at a time (in_conflict2)
+  /// and recorded in the order they were met, so the cavity and its boundary come out exactly
+  /// as with one test at a time.
   [[gnu::always_inline]] bool grow_cavity(std::uint32_t base, const double* p) {
     Mark* const state = state_;
     const std::uint32_t* const T = T_;
@@ -496,6 +519,12 @@ class Kernel {
     // lists the tets tested and not in conflict, to unmark them if it gives up; otherwise
     // fill_cavity() unmarks them, as each is outside a face of the cavity's boundary.
     auto record = [&](std::uint32_t n, bool conflict) {
+      if constexpr (!kParallel) {  // without a branch: the outcome is a coin toss
+        state[n] = Mark(kOutside - conflict);  // kInCavity if in conflict
+        cavity_.push_unchecked(n);            // room reserved by the caller
+        cavity_.set_end(cavity_.end() - !conflict);
+        return true;
+      }
       if (!conflict) {
         if constexpr (kParallel) touched_.push(n);
         return true;
@@ -509,34 +538,43 @@ class Kernel {
       cavity_.push(n);
       return true;
     };
-    std::uint32_t pending = kNone;  // met, marked visited, not tested yet
+    // Neighbours met, marked kOutside and not tested yet, in the order met: at most one left
+    // over from the last cavity tet plus four new ones.
+    std::uint32_t pend[6];
+    std::size_t np = 0;
+    auto unmark_pending = [&](std::size_t from) {
+      for (std::size_t j = from; j < np; ++j) state[pend[j]] = kUnvisited;
+      return abandon_cavity();
+    };
     for (std::size_t i = 0;;) {
       if (i == cavity_.size()) {
-        if (pending == kNone) break;
-        const std::uint32_t n = pending;
-        pending = kNone;
-        if (!record(n, in_conflict(n, p))) return abandon_cavity();
-        continue;  // n may have grown the cavity
+        if (np == 0) break;
+        np = 0;  // one left: pairs are tested as soon as they form
+        cavity_.reserve_more(1);
+        if (!record(pend[0], in_conflict(pend[0], p))) return abandon_cavity();
+        continue;  // it may have grown the cavity
       }
-      const std::uint32_t c = cavity_[i++];
+      // Gather the unvisited neighbours without a branch per face (whether a neighbour is new
+      // is unpredictable): each is written at the end and kept by moving the end past it.
+      const std::uint32_t* adj = &T[8 * std::size_t(cavity_[i++]) + 4];
       for (int f = 0; f < 4; ++f) {
-        const std::uint32_t n = T[8 * std::size_t(c) + 4 + f] >> 2;
-        if (state[n] != kUnvisited) continue;
-        state[n] = kOutside;  // visited; record() sets kInCavity if in conflict
-        if (pending == kNone) {
-          pending = n;
-          continue;
-        }
-        const std::uint32_t m = pending;
-        pending = kNone;
-        bool cm, cn;
-        in_conflict2(m, n, p, cm, cn);
-        if (!record(m, cm)) {
-          state[n] = kUnvisited;
-          return abandon_cavity();
-        }
-        if (!record(n, cn)) return abandon_cavity();
+        const std::uint32_t n = adj[f] >> 2;
+        const Mark m = state[n];
+        const std::uint32_t fresh = m == kUnvisited;
+        pend[np] = n;
+        np += fresh;
+        state[n] = Mark(m | fresh << 1);  // kUnvisited -> kOutside, the others unchanged
       }
+      std::size_t j = 0;
+      cavity_.reserve_more(np);
+      for (; j + 1 < np; j += 2) {
+        bool c0, c1;
+        in_conflict2(pend[j], pend[j + 1], p, c0, c1);
+        if (!record(pend[j], c0)) return unmark_pending(j + 1);
+        if (!record(pend[j + 1], c1)) return unmark_pending(j + 2);
+      }
+      pend[0] = pend[j];
+      np -= j;
     }
     if constexpr (kParallel) {
       // A cavity of k tets (a ball) has at most 2k + 2 boundary faces, one new tet each; k of
@@ -558,18 +596,24 @@ class Kernel {
     //    (v0, v1, v2, v3) becomes the new tet with v_f replaced by p and the vertices permuted
     //    by i -> i ^ (f ^ 3): an even permutation (the identity or two swaps), so the tet stays
     //    positively oriented, that puts p in slot 3. Every new tet then has the same layout.
+    //    Without a branch per face (whether a face is on the boundary is unpredictable): each
+    //    face is written at the end and kept by moving the end past it. The tets outside, all
+    //    tested from a cavity face (kOutside), are unmarked on the way.
     boundary_.clear();
     boundary_.reserve_more(4 * cavity_.size());
+    BoundaryFace* out = boundary_.end();
     for (std::uint32_t c : cavity_) {
       const std::uint32_t* rec = &T_[8 * std::size_t(c)];
       for (std::uint32_t f = 0; f < 4; ++f) {
         const std::uint32_t outer = rec[4 + f];
-        if (state_[outer >> 2] == kInCavity) continue;
-        state_[outer >> 2] = kUnvisited;  // it was tested from this face: kOutside
+        const Mark m = state_[outer >> 2];
+        state_[outer >> 2] = Mark(m & kInCavity);  // kOutside -> kUnvisited
         const std::uint32_t x = f ^ 3;
-        boundary_.push_unchecked(BoundaryFace{{rec[x], rec[1 ^ x], rec[2 ^ x]}, outer});
+        *out = BoundaryFace{{rec[x], rec[1 ^ x], rec[2 ^ x]}, outer};
+        out += m != kInCavity;
       }
     }
+    boundary_.set_end(out);
     // 2. Dead cavity tets become free slots; new tets take them first.
     free_.reserve_more(cavity_.size());
     for (std::uint32_t c : cavity_) {
@@ -587,12 +631,14 @@ class Kernel {
       t = new_tet({b.w[0], b.w[1], b.w[2], pid});
       adj(t, 3) = b.outer;
       adj_of(b.outer) = 4 * t + 3;
+      // Branch-free like match(): a face met first points at itself until its partner, met
+      // later, links the two.
       auto link = [&](std::uint32_t k, std::uint32_t u, std::uint32_t w) __attribute__((always_inline)) {
-        const std::uint32_t other = edges_.match(u, w, 4 * t + k);
-        if (other != kNone) {
-          adj(t, int(k)) = other;
-          adj_of(other) = 4 * t + k;
-        }
+        const std::uint32_t self = 4 * t + k;
+        const std::uint32_t other = edges_.match(u, w, self);
+        const std::uint32_t first = opaque(0u - std::uint32_t(other == kNone));  // all ones if so
+        adj_of(self) = other;
+        adj_of((other & ~first) | (self & first)) = self;  // first: its own slot, rewritten later
       };
       link(0, b.w[1], b.w[2]);
       link(1, b.w[0], b.w[2]);
