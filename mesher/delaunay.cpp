@@ -409,6 +409,7 @@ class Kernel {
     const std::size_t limit = 16 + 4 * s_.used;
     for (std::size_t steps = 0; steps < limit; ++steps) {
       const std::uint32_t* rec = &T_[8 * std::size_t(t)];
+      for (int f = 0; f < 4; ++f) __builtin_prefetch(&T_[8 * std::size_t(rec[4 + f] >> 2)]);  // next
       const double* q[4] = {P(rec[0]), P(rec[1]), P(rec[2]), P(rec[3])};
       // Faces in the order of their opposite vertices' projections on the direction from the
       // centroid to p (u = 4 (p - centroid)): the face opposite the vertex farthest behind
@@ -557,6 +558,13 @@ class Kernel {
       // Gather the unvisited neighbours without a branch per face (whether a neighbour is new
       // is unpredictable): each is written at the end and kept by moving the end past it.
       const std::uint32_t* adj = &T[8 * std::size_t(cavity_[i++]) + 4];
+      // The next cavity tet's neighbours will be tested soon: start loading their records (a
+      // cache miss each on large inputs; 1M points, with the walk's prefetch below: -9% on the
+      // cube, -15% on the axes).
+      if (i < cavity_.size()) {
+        const std::uint32_t* nx = &T[8 * std::size_t(cavity_[i]) + 4];
+        for (int f = 0; f < 4; ++f) __builtin_prefetch(&T[8 * std::size_t(nx[f] >> 2)]);
+      }
       for (int f = 0; f < 4; ++f) {
         const std::uint32_t n = adj[f] >> 2;
         const Mark m = state[n];
