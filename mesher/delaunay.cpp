@@ -541,7 +541,7 @@ class Kernel {
     };
     // Neighbours met, marked kOutside and not tested yet, in the order met: at most one left
     // over from the last cavity tet plus four new ones.
-    std::uint32_t pend[6];
+    std::uint32_t pend[6] = {};  // (pend[j] below may be read past np; never used then)
     std::size_t np = 0;
     auto unmark_pending = [&](std::size_t from) {
       for (std::size_t j = from; j < np; ++j) state[pend[j]] = kUnvisited;
@@ -559,8 +559,8 @@ class Kernel {
       // is unpredictable): each is written at the end and kept by moving the end past it.
       const std::uint32_t* adj = &T[8 * std::size_t(cavity_[i++]) + 4];
       // The next cavity tet's neighbours will be tested soon: start loading their records (a
-      // cache miss each on large inputs; 1M points, with the walk's prefetch below: -9% on the
-      // cube, -15% on the axes).
+      // cache miss each on large inputs; 1M points, with locate()'s prefetch: -14% on the
+      // cube, -24% on the axes).
       if (i < cavity_.size()) {
         const std::uint32_t* nx = &T[8 * std::size_t(cavity_[i]) + 4];
         for (int f = 0; f < 4; ++f) __builtin_prefetch(&T[8 * std::size_t(nx[f] >> 2)]);
@@ -660,8 +660,8 @@ class Kernel {
 
   Store& s_;
   const double* xyz_;
-  // The store's arrays, cached: reached through s_ they would be reloaded after every store to
-  // the byte array state (a char store may alias anything). refresh() after they grow.
+  // The store's arrays, cached (it was once needed against reloads; state's Mark type now
+  // prevents those too). refresh() after they grow.
   std::uint32_t* T_ = nullptr;
   Mark* state_ = nullptr;
   std::uint32_t* v2t_ = nullptr;
