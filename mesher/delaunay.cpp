@@ -186,21 +186,17 @@ struct Store {
   /// Appends `count` slots, all in use (alive or on a free list) from now on.
   void add_slots(std::size_t count) {
     used += count;
-    if (8 * used > T.size()) {
-      T.resize(8 * used, kNone);
-      state.resize(used, kUnvisited);
-    }
+    if (8 * used > T.size()) resize_slots(used);
   }
   /// Room for at least `count` more slots past `used`, which is unchanged: appending a tet is
   /// then a counter increment, not a vector resize per tet (2.7% of the instructions).
-  void spare_slots(std::size_t count) {
-    T.resize(T.size() + 8 * count, kNone);
-    state.resize(T.size() / 8, kUnvisited);
-  }
+  void spare_slots(std::size_t count) { resize_slots(T.size() / 8 + count); }
   /// Drops the spare slots.
-  void trim() {
-    T.resize(8 * used);
-    state.resize(used);
+  void trim() { resize_slots(used); }
+  /// Slot arrays for `tets` tets; new slots are unset and unmarked.
+  void resize_slots(std::size_t tets) {
+    T.resize(8 * tets, kNone);
+    state.resize(tets, kUnvisited);
   }
 };
 
@@ -467,8 +463,9 @@ class Kernel {
     throw Error("delaunay: point location did not terminate (internal error)");
   }
 
-  /// One tet against p: for the last neighbour left without a partner and for infinite tets,
-  /// so out of line (inlined, GCC mixes its scalar code into the two-lane path).
+  /// One tet against p: for the last neighbour left without a partner, for infinite tets and
+  /// where the two-lane filter gives no sign; so out of line (inlined, GCC mixes its scalar
+  /// code into the two-lane path: +5% instructions per point, measured with callgrind).
   [[gnu::noinline]] bool in_conflict(std::uint32_t n, const double* p) const {
     const std::uint32_t* v = &T_[8 * std::size_t(n)];
     if ((v[0] | v[1] | v[2] | v[3]) == kInf) return tet_in_conflict(xyz_, T_, n, p);
@@ -490,18 +487,11 @@ class Kernel {
     int s[2];
     pred::insphere_filter2(a, b, p, s);
     if ((s[0] == 0) | (s[1] == 0)) [[unlikely]] {
-      if (s[0] == 0) s[0] = undecided_conflict(a, p) ? 1 : -1;
-      if (s[1] == 0) s[1] = undecided_conflict(b, p) ? 1 : -1;
+      if (s[0] == 0) s[0] = in_conflict(n0, p) ? 1 : -1;
+      if (s[1] == 0) s[1] = in_conflict(n1, p) ? 1 : -1;
     }
     c0 = s[0] > 0;
     c1 = s[1] > 0;
-  }
-
-  /// The perturbed insphere where the two-lane filter gave no sign (rare). Out of line: GCC
-  /// otherwise sometimes inlines it into the cavity loop and hoists its subtractions there
-  /// (+5% instructions per point, measured with callgrind).
-  [[gnu::noinline]] static bool undecided_conflict(const double* const* t, const double* p) {
-    return pred::insphere_perturbed(t[0], t[1], t[2], t[3], p) > 0;
   }
 
   /// Collects the tets in conflict with p, breadth-first from `base`. A parallel worker gives
@@ -524,19 +514,16 @@ class Kernel {
         state[n] = Mark(kOutside - conflict);  // kInCavity if in conflict
         cavity_.push_unchecked(n);            // room reserved by the caller
         cavity_.set_end(cavity_.end() - !conflict);
-        return true;
-      }
-      if (!conflict) {
-        if constexpr (kParallel) touched_.push(n);
-        return true;
-      }
-      if constexpr (kParallel)
+      } else if (!conflict) {
+        touched_.push(n);
+      } else {
         if (!owns_tet(n)) {
           state[n] = kUnvisited;
           return false;
         }
-      state[n] = kInCavity;
-      cavity_.push(n);
+        state[n] = kInCavity;
+        cavity_.push(n);
+      }
       return true;
     };
     // Neighbours met, marked kOutside and not tested yet, in the order met: at most one left
