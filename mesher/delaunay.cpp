@@ -510,6 +510,15 @@ class Kernel {
     // lists the tets tested and not in conflict, to unmark them if it gives up; otherwise
     // fill_cavity() unmarks them, as each is outside a face of the cavity's boundary.
     auto record = [&](std::uint32_t n, bool conflict) {
+      // If n is in conflict, its neighbours will be tested once the tets queued before it are
+      // done: start loading their records and marks now, the earliest moment the addresses are
+      // known (n's record was just read). Whether n is in conflict is a coin toss, so this is
+      // done for every tested tet. 1M points: -5% on the cube, -7% on the axes.
+      for (int f = 0; f < 4; ++f) {
+        const std::uint32_t u = T[8 * std::size_t(n) + 4 + f] >> 2;
+        __builtin_prefetch(&T[8 * std::size_t(u)]);
+        __builtin_prefetch(&state[u]);
+      }
       if constexpr (!kParallel) {  // without a branch: the outcome is a coin toss
         state[n] = Mark(kOutside - conflict);  // kInCavity if in conflict
         cavity_.push_unchecked(n);            // room reserved by the caller
@@ -1048,9 +1057,13 @@ DelaunayResult delaunay(const PointSet& points, const Ordering& order,
     done += count;
     if (options.progress && (before >> 16) != (done >> 16)) options.progress(double(done) / double(n));
   };
-  auto hint_of = [&](std::size_t rank) {
-    return order.hint[rank] == kNoHint ? kNone : rank_of[order.hint[rank]];
-  };
+  // The hints as ranks, gathered in one pass of independent loads, not one dependent random
+  // load per insertion (1M axes points: -7%).
+  std::vector<std::uint32_t> hint_rank(n);
+  for (std::size_t r = 0; r < n; ++r)
+    hint_rank[r] = order.hint[r] == kNoHint ? kNone : rank_of[order.hint[r]];
+  std::vector<std::uint32_t>().swap(rank_of);
+  auto hint_of = [&](std::size_t rank) { return hint_rank[rank]; };
   for (std::uint32_t r : deferred) {
     kernel.insert(r, hint_of(r));
     report(1);
