@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <exception>
@@ -383,7 +384,18 @@ class Kernel {
     refresh();
   }
 
-  /// Steps of locate() with ordered faces before its first face becomes random.
+  /// walk(), counted: the orientation tests and the walk histogram (DelaunayStats::walks).
+  [[gnu::always_inline]] std::uint32_t locate(const double* p, std::uint32_t t) {
+    std::uint64_t tests = 0;  // a local: the walk's loop keeps it in a register
+    t = walk(p, t, tests);
+    const std::size_t bin = std::min<std::size_t>(std::bit_width(tests), kWalkBins - 1);
+    stats_.orient_tests += tests;
+    ++stats_.walks[bin];
+    stats_.walk_tests[bin] += tests;
+    return t;
+  }
+
+  /// Steps of walk() with ordered faces before its first face becomes random.
   static constexpr std::size_t kOrderedSteps = 1024;
 
   /// Visibility walk: from `t`, cross any face that separates t from p, until p is in the
@@ -393,7 +405,8 @@ class Kernel {
   /// after kOrderedSteps steps the first face becomes random, which terminates on any
   /// triangulation (with probability 1). A parallel worker returns kNone when the walk would
   /// enter a tet it does not own.
-  [[gnu::always_inline]] std::uint32_t locate(const double* p, std::uint32_t t) {
+  [[gnu::always_inline]] std::uint32_t walk(const double* p, std::uint32_t t,
+                                            std::uint64_t& tests) {
     if (is_infinite(t)) {
       int i = 0;
       while (vert(t, i) != kInf) ++i;
@@ -445,7 +458,7 @@ class Kernel {
         if (n == prev) continue;  // p is on t's side of that face (tested from the other side)
         const double* saved = q[f];
         q[f] = p;
-        ++stats_.orient_tests;
+        ++tests;
         const int o = pred::orient3d(q[0], q[1], q[2], q[3]);
         q[f] = saved;
         if (o < 0) {
@@ -945,6 +958,10 @@ std::vector<std::uint32_t> insert_in_rounds(Store& s, Kernel<false>& seq, std::s
     free.append(workers[w]->free_list());
     st.inserted += wstats[w].inserted;
     st.orient_tests += wstats[w].orient_tests;
+    for (std::size_t b = 0; b < kWalkBins; ++b) {
+      st.walks[b] += wstats[w].walks[b];
+      st.walk_tests[b] += wstats[w].walk_tests[b];
+    }
     st.conflicts += wstats[w].conflicts;
     st.duplicates.insert(st.duplicates.end(), wstats[w].duplicates.begin(), wstats[w].duplicates.end());
     st.duplicate_of.insert(st.duplicate_of.end(), wstats[w].duplicate_of.begin(),

@@ -2,6 +2,8 @@
 // (pipeline stage: PointSet + Ordering -> Triangulation).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -22,9 +24,19 @@ struct DelaunayOptions {
   unsigned threads = 1;
 };
 
+/// Bins of DelaunayStats' walk histogram: bin 0 holds the walks of 0 orientation tests, bin
+/// b >= 1 those of [2^(b-1), 2^b) tests, and the last bin every walk of 2^(kWalkBins-2) = 1024
+/// tests or more.
+inline constexpr std::size_t kWalkBins = 12;
+
 struct DelaunayStats {
   std::uint64_t inserted = 0;       ///< points in the triangulation
   std::uint64_t orient_tests = 0;   ///< orientation tests during point location (paper's count)
+  /// Point locations (walks) by their orientation tests, binned as kWalkBins says: the walks
+  /// in each bin and their tests. A mean hides a heavy tail: on 37.5k axes points 2% of the
+  /// walks make a quarter of the tests. Sum of walk_tests == orient_tests; a point a parallel
+  /// worker defers is located again later, so there may be more walks than points.
+  std::array<std::uint64_t, kWalkBins> walks{}, walk_tests{};
   std::uint64_t conflicts = 0;      ///< conflicting tets summed over all insertions (paper's count)
   std::uint64_t exact_fallbacks = 0;  ///< predicate calls the float filter could not decide
   std::vector<std::uint32_t> duplicates;    ///< ids of points skipped as exact duplicates ...
@@ -55,7 +67,7 @@ DelaunayResult delaunay(const PointSet& points, const Ordering& order,
 ///  - ids:    the points to insert, in this order
 ///  - hints:  per inserted point, a point id already in the triangulation to start locating
 ///            from (e.g. a vertex of the face being repaired), or kNoHint
-/// Adds to `stats` (inserted, orient_tests, conflicts, duplicates, seconds). The result is the
+/// Adds to `stats` (inserted, orient_tests, walks, conflicts, duplicates, seconds). The result is the
 /// Delaunay tetrahedralization of all points, under the same tie-breaking as delaunay().
 /// Throws UsageError for out-of-range ids or a mismatched triangulation.
 void delaunay_insert(Triangulation& tri, const PointSet& points,

@@ -72,6 +72,17 @@ TEST(Cli, DelaunayCheckJsonAndVtu) {
   EXPECT_EQ(j["tets"], j["check"]["tetgen"]["reference_tets"]);
   EXPECT_GT(j["counts"]["orient_tests_per_point"].get<double>(), 1.0);
   EXPECT_GT(j["counts"]["conflicts_per_point"].get<double>(), 1.0);
+  // The walk histogram: its bins' tests add up to the per-point count, one walk per point but
+  // the first four.
+  ASSERT_TRUE(j["walk_histogram"].is_array());
+  double walks = 0, tests = 0;
+  for (const auto& bin : j["walk_histogram"]) {
+    walks += bin["walks"].get<double>();
+    tests += bin["tests"].get<double>();
+  }
+  EXPECT_EQ(walks, 3000 - 4);
+  EXPECT_NEAR(tests / 3000, j["counts"]["orient_tests_per_point"].get<double>(), 1e-9);
+  EXPECT_TRUE(j["walk_histogram"].back()["tests_max"].is_null());  // the open last bin
   for (const char* stage : {"read", "order", "delaunay", "check", "write", "total"})
     EXPECT_TRUE(j["seconds"].contains(stage)) << stage;
   const std::string xml = slurp(vtu);

@@ -14,6 +14,7 @@
 #include "mesher/order.h"
 #include "mesher/reference_delaunay.h"
 #include "mesher/tet_compare.h"
+#include "tests/support/walk_histogram.h"
 #include "tools/lib/distributions.h"
 
 namespace kdmesh {
@@ -264,6 +265,31 @@ TEST(Delaunay, OrderedWalkNeedsFewOrientationTests) {
   const double per_point = double(r.stats.orient_tests) / double(pts.size());
   EXPECT_LT(per_point, 9.5);
   EXPECT_GT(per_point, 4.0);
+}
+
+// DelaunayStats::walks bins each point's walk by its orientation tests. Every point but the
+// first four (they form the first tet) is located once, duplicates included. Hints far from
+// the points move the walks to the upper bins: here every point starts from the kd root, a
+// point near the centre, so most walks cross a good part of the cube.
+TEST(Delaunay, WalkHistogramAddsUpAndShowsFarHints) {
+  PointSet pts = generate_points(Distribution::cube, 5000, 3);
+  for (std::uint32_t i = 0; i < 50; ++i) pts.push_back(pts.p(97 * i)[0], pts.p(97 * i)[1], pts.p(97 * i)[2]);
+  const DelaunayResult near = run(pts);
+  ASSERT_EQ(near.stats.duplicates.size(), 50u);
+  const std::uint64_t located = pts.size() - 4;
+  test::expect_walk_histogram_consistent(near.stats, located, located, "kd-bfs hints");
+
+  Ordering far = make_order(pts, {OrderKind::kd_bfs, 1, 0.125});
+  for (std::size_t k = 1; k < far.hint.size(); ++k) far.hint[k] = far.order[0];
+  const DelaunayResult r = delaunay(pts, far);
+  test::expect_walk_histogram_consistent(r.stats, located, located, "root hints");
+  EXPECT_EQ(r.tri.data.size(), near.tri.data.size());  // the same number of tets
+  std::uint64_t near_long = 0, far_long = 0;  // walks of 32 tests or more
+  for (std::size_t b = 6; b < kWalkBins; ++b) {
+    near_long += near.stats.walks[b];
+    far_long += r.stats.walks[b];
+  }
+  EXPECT_GT(far_long, 10 * near_long + pts.size() / 10) << far_long << " " << near_long;
 }
 
 TEST(Delaunay, Deterministic) {

@@ -11,6 +11,7 @@
 #include "mesher/delaunay_check.h"
 #include "mesher/order.h"
 #include "mesher/tet_compare.h"
+#include "tests/support/walk_histogram.h"
 #include "tools/lib/distributions.h"
 
 namespace kdmesh {
@@ -82,6 +83,10 @@ TEST(ParallelDelaunay, DeterministicForAThreadCount) {
   EXPECT_EQ(a.stats.conflicts, b.stats.conflicts);
   EXPECT_EQ(a.stats.deferrals, b.stats.deferrals);
   EXPECT_GT(a.stats.deferrals, 0u);  // the rounds did meet their slab boundaries
+  // Each point but the first four is located at least once; a deferred point may be again
+  // (a worker defers some points before walking, from a hint it does not own).
+  test::expect_walk_histogram_consistent(a.stats, kN - 4, kN - 4 + a.stats.deferrals,
+                                         "spiral, 2 threads");
 }
 
 TEST(ParallelDelaunay, DuplicatesAreSkippedInRounds) {

@@ -112,6 +112,18 @@ int run_delaunay(const Options& o) {
               {"exact_fallbacks", r.stats.exact_fallbacks},
               {"parallel_rounds", r.stats.parallel_rounds},
               {"deferrals", r.stats.deferrals}};
+    // The walks by orientation tests (DelaunayStats::walks): bins [lo, hi], hi null for the
+    // open last bin.
+    nlohmann::json bins = nlohmann::json::array();
+    for (std::size_t b = 0; b < kWalkBins; ++b) {
+      const std::uint64_t lo = b == 0 ? 0 : std::uint64_t(1) << (b - 1);
+      const nlohmann::json hi = b == 0 ? nlohmann::json(0)
+                                : b + 1 == kWalkBins ? nlohmann::json(nullptr)
+                                                    : nlohmann::json((std::uint64_t(1) << b) - 1);
+      bins.push_back({{"tests_min", lo}, {"tests_max", hi}, {"walks", r.stats.walks[b]},
+                      {"tests", r.stats.walk_tests[b]}});
+    }
+    j["walk_histogram"] = bins;
     for (std::size_t i = 0; i < r.stats.duplicates.size(); ++i) {
       if (i == 10) {
         out.human() << "  ... " << r.stats.duplicates.size() - 10 << " more duplicates\n";
@@ -159,6 +171,24 @@ int run_delaunay(const Options& o) {
     if (counts.contains("exact_fallbacks"))
       out.human() << ", exact fallbacks " << counts["exact_fallbacks"].get<std::uint64_t>();
     out.human() << "\n";
+  }
+  if (j.contains("walk_histogram")) {
+    // The tail a mean hides: walks of 64 tests or more (bins 7 and up).
+    double walks = 0, tests = 0, long_walks = 0, long_tests = 0;
+    for (std::size_t b = 0; b < kWalkBins; ++b) {
+      const double w = j["walk_histogram"][b]["walks"].get<double>();
+      const double t = j["walk_histogram"][b]["tests"].get<double>();
+      walks += w;
+      tests += t;
+      if (b >= 7) {
+        long_walks += w;
+        long_tests += t;
+      }
+    }
+    if (walks > 0 && tests > 0)
+      out.human() << "  walks of 64+ orientation tests: " << std::setprecision(3)
+                  << 100 * long_walks / walks << "% of the walks, " << 100 * long_tests / tests
+                  << "% of the tests\n";
   }
   if (counts.value("parallel_rounds", 0u) > 0)
     out.human() << "  parallel: " << counts["parallel_rounds"].get<unsigned>() << " rounds on "
