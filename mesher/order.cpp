@@ -1,5 +1,5 @@
 // kdmesh — insertion orders: dispatch, names, and the hilbert / brio / random / input orders.
-// The kd-tree orders live in order_kd.cpp, Hilbert keys in order_hilbert.cpp.
+// The kd-tree orders live in order_kd*.cpp, Hilbert keys in order_hilbert.cpp.
 // SPDX-License-Identifier: AGPL-3.0-or-later
 //
 // Definitions (all deterministic for given points and options):
@@ -41,7 +41,7 @@ struct KindName {
 
 constexpr KindName kKinds[] = {
     {OrderKind::kd_bfs, "kd-bfs"}, {OrderKind::kd_bfs_alt, "kd-bfs-alt"},
-    {OrderKind::kd_local, "kd-local"},
+    {OrderKind::kd_bfs_hilbert, "kd-bfs-hilbert"}, {OrderKind::kd_local, "kd-local"},
     {OrderKind::hilbert, "hilbert"}, {OrderKind::brio, "brio"},
     {OrderKind::random, "random"},   {OrderKind::input, "input"},
 };
@@ -107,6 +107,9 @@ Ordering make_order(const PointSet& points, const OrderOptions& options) {
       break;
     case OrderKind::kd_bfs_alt:
       out = detail::make_kd_order(points, true);
+      break;
+    case OrderKind::kd_bfs_hilbert:
+      out = detail::make_kd_hilbert_order(points);
       break;
     case OrderKind::kd_local:
       if (options.local_points == 0) throw UsageError("kd-local subtree size must be positive");

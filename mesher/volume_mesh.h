@@ -18,7 +18,7 @@
 namespace kdmesh {
 
 struct VolumeMeshOptions {
-  OrderOptions order;                ///< insertion order of the nodes (kd-bfs by default)
+  OrderOptions order;                ///< insertion order of the nodes (kd-bfs-hilbert by default)
   int max_steiner_rounds = 12;       ///< rounds of surface Steiner insertion before giving up
   /// A boundary face must lie within hausdorff_tolerance * h (local target size) of the
   /// input surface; farther faces get a Steiner point on the surface.

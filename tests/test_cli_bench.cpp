@@ -65,14 +65,14 @@ double positive(const std::map<std::string, std::string>& row, const std::string
 
 TEST(CliBench, SmokeRunAllKernels) {
   const fs::path out = tmpdir() / "smoke";
-  const CliResult r = kdmesh("bench --dists cube,axes --sizes 2000 --orders kd-bfs,hilbert,cgal --out " +
+  const CliResult r = kdmesh("bench --dists cube,axes --sizes 2000 --orders kd-bfs,kd-bfs-hilbert,hilbert,cgal --out " +
                              out.string() + " --json");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);  // stdout is exactly one JSON document
   EXPECT_EQ(j["command"], "bench");
 
-  // Per distribution: kdmesh x {kd-bfs, hilbert}, cgal x {kd-bfs, hilbert, range}, tetgen;
-  // plus Table 15's order-only runs (kd-bfs, hilbert) on the cube.
+  // Per distribution: kdmesh x {kd-bfs, kd-bfs-hilbert, hilbert}, cgal x {the same, range},
+  // tetgen; plus Table 15's order-only runs (kd-bfs, hilbert, kd-bfs-hilbert) on the cube.
   std::vector<std::string> header;
   const auto rows = read_csv(out / "results.csv", header);
   const std::vector<std::string> expected_header = {
@@ -80,8 +80,8 @@ TEST(CliBench, SmokeRunAllKernels) {
       "orient_per_point", "conflicts_per_point", "sphere_tests_per_point", "orient_all_per_point",
       "peak_rss_bytes", "bytes_per_point", "tets", "wall_seconds", "count_wall_seconds", "note"};
   EXPECT_EQ(header, expected_header);
-  ASSERT_EQ(rows.size(), 14u);
-  EXPECT_EQ(j["runs"], 14);
+  ASSERT_EQ(rows.size(), 19u);
+  EXPECT_EQ(j["runs"], 19);
   std::map<std::string, int> runs_per_kernel;
   std::map<std::string, std::string> tets_of_dist;
   for (const auto& row : rows) {
@@ -120,10 +120,10 @@ TEST(CliBench, SmokeRunAllKernels) {
       positive(row, "order_seconds");
     }
   }
-  EXPECT_EQ(runs_per_kernel["kdmesh"], 4);
-  EXPECT_EQ(runs_per_kernel["cgal"], 6);
+  EXPECT_EQ(runs_per_kernel["kdmesh"], 6);
+  EXPECT_EQ(runs_per_kernel["cgal"], 8);
   EXPECT_EQ(runs_per_kernel["tetgen"], 2);
-  EXPECT_EQ(runs_per_kernel["order-only"], 2);
+  EXPECT_EQ(runs_per_kernel["order-only"], 3);
 
   const std::string md = slurp(out / "tables.md");
   for (const char* heading : {"### Table 1 Cube", "### Table 7 Axes", "### Table 8 Cube", "### Table 14 Axes",
@@ -138,7 +138,7 @@ TEST(CliBench, SmokeRunAllKernels) {
     EXPECT_NE(r.err.find("gnuplot"), std::string::npos);
   }
   // One progress line per run on stderr.
-  EXPECT_NE(r.err.find("[ 14/14]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("[ 19/19]"), std::string::npos) << r.err;
 }
 
 TEST(CliBench, TimeoutKillsTheRun) {

@@ -27,10 +27,13 @@ namespace {
 
 constexpr std::uint32_t X = kNoHint;
 
-const OrderKind kAllKinds[] = {OrderKind::kd_bfs, OrderKind::kd_bfs_alt, OrderKind::hilbert,
-                               OrderKind::brio,   OrderKind::random,     OrderKind::input};
+const OrderKind kAllKinds[] = {OrderKind::kd_bfs, OrderKind::kd_bfs_alt, OrderKind::kd_bfs_hilbert,
+                               OrderKind::hilbert, OrderKind::brio, OrderKind::random,
+                               OrderKind::input};
 
-bool is_kd(OrderKind k) { return k == OrderKind::kd_bfs || k == OrderKind::kd_bfs_alt; }
+bool is_kd(OrderKind k) {
+  return k == OrderKind::kd_bfs || k == OrderKind::kd_bfs_alt || k == OrderKind::kd_bfs_hilbert;
+}
 
 Ordering order_of(const PointSet& ps, OrderKind kind, std::uint64_t seed = 1) {
   OrderOptions o;
@@ -132,12 +135,46 @@ TEST(KdLocalOrder, SmallInputsEqualKdBfs) {
 }
 
 // ---------------------------------------------------------------------------------------
+// kd-bfs-hilbert: the kd-bfs tree, each level in Hilbert order
+// ---------------------------------------------------------------------------------------
+
+// Every point keeps its kd-bfs parent and level, each level keeps its place in the order, and
+// inside a level the points are sorted by (Hilbert key, id). Sizes below and above the
+// threshold (2^16) where the last level is sorted on a second thread; the axes have equal keys
+// (points closer than a key cell) to exercise the ids.
+TEST(KdHilbertOrder, KdBfsLevelsSortedByHilbertKey) {
+  for (const auto& [dist, n] : {std::pair{Distribution::axes, std::size_t(3000)},
+                                std::pair{Distribution::planes, std::size_t(70000)}}) {
+    PointSet pts = generate_points(dist, n, 4);
+    for (int i = 0; i < 50; ++i) pts.push_back(pts.p(7)[0], pts.p(7)[1], pts.p(7)[2]);
+    const std::string what = std::string(distribution_name(dist)) + " " + std::to_string(n);
+    const Ordering bfs = order_of(pts, OrderKind::kd_bfs);
+    const Ordering o = order_of(pts, OrderKind::kd_bfs_hilbert);
+    expect_valid(pts, o, OrderKind::kd_bfs_hilbert);
+    ASSERT_EQ(o.level, bfs.level) << what;  // the levels keep their places and sizes
+    std::vector<std::uint32_t> hint_of(pts.size());
+    for (std::size_t k = 0; k < bfs.size(); ++k) hint_of[bfs.order[k]] = bfs.hint[k];
+    const std::vector<std::uint64_t> keys = hilbert::point_keys(pts);
+    std::size_t equal_keys = 0;
+    for (std::size_t k = 0; k < o.size(); ++k) {
+      EXPECT_EQ(o.hint[k], hint_of[o.order[k]]) << what << ", rank " << k;
+      if (k > 0 && o.level[k] == o.level[k - 1]) {
+        const std::uint32_t a = o.order[k - 1], b = o.order[k];
+        ASSERT_TRUE(keys[a] < keys[b] || (keys[a] == keys[b] && a < b)) << what << ", rank " << k;
+        equal_keys += keys[a] == keys[b];
+      }
+    }
+    EXPECT_GT(equal_keys, 0u) << what;  // the repeated points at least
+  }
+}
+
+// ---------------------------------------------------------------------------------------
 // Names
 // ---------------------------------------------------------------------------------------
 
 TEST(OrderNames, RoundTripAndUnknown) {
-  const std::vector<std::string> expected = {"kd-bfs", "kd-bfs-alt", "kd-local", "hilbert",
-                                             "brio",   "random",     "input"};
+  const std::vector<std::string> expected = {"kd-bfs", "kd-bfs-alt", "kd-bfs-hilbert", "kd-local",
+                                             "hilbert", "brio", "random", "input"};
   EXPECT_EQ(order_kind_names(), expected);
   for (const std::string& name : expected) {
     EXPECT_EQ(order_kind_name(parse_order_kind(name)), name);

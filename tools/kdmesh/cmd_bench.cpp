@@ -147,10 +147,11 @@ void add_bench_command(CLI::App& app, Runner& run) {
       ->delimiter(',')
       ->check(CLI::IsMember({"kdmesh", "cgal", "tetgen"}));
   cmd->add_option("--orders", b.orders,
-                  "Orders: kd-bfs, kd-bfs-alt, hilbert, brio, random, input, cgal (CGAL's "
+                  "Orders: kd-bfs, kd-bfs-hilbert, kd-bfs-alt, hilbert, brio, random, input, cgal (CGAL's "
                   "insert(range)) (default: all but input)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"kd-bfs", "kd-bfs-alt", "hilbert", "brio", "random", "input", "cgal"}));
+      ->check(CLI::IsMember(
+          {"kd-bfs", "kd-bfs-hilbert", "kd-bfs-alt", "hilbert", "brio", "random", "input", "cgal"}));
   cmd->add_option("--order-sizes", b.order_sizes,
                   "Table 15 sizes (order building only, cube and cylinder); 0 for none (default: "
                   "500000,1000000; the paper's with --full; --sizes when given)")

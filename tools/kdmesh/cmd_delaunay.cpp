@@ -25,7 +25,7 @@ namespace {
 
 struct Options {
   std::string input;
-  std::string order = "kd-bfs";
+  std::string order = "kd-bfs-hilbert";
   std::string kernel = "kdmesh";
   std::uint64_t seed = 1;
   bool check = false;

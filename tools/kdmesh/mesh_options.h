@@ -23,7 +23,7 @@ struct MeshCliOptions {
   double gradation = 0.3;
   double sharp_angle = 30;
   double scale = 1;
-  std::string order = "kd-bfs";
+  std::string order = "kd-bfs-hilbert";
   std::uint64_t seed = 1;
   std::vector<std::string> checks;
   std::string max_memory;   ///< empty: the machine's memory
