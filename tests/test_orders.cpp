@@ -140,8 +140,8 @@ TEST(KdLocalOrder, SmallInputsEqualKdBfs) {
 
 // Every point keeps its kd-bfs parent and level, each level keeps its place in the order, and
 // inside a level the points are sorted by (Hilbert key, id). Sizes below and above the
-// threshold (2^16) where the last level is sorted on a second thread; the axes have equal keys
-// (points closer than a key cell) to exercise the ids.
+// threshold (2^16) where the keys are computed on a second thread; repeated points have equal
+// keys, to exercise the ids.
 TEST(KdHilbertOrder, KdBfsLevelsSortedByHilbertKey) {
   for (const auto& [dist, n] : {std::pair{Distribution::axes, std::size_t(3000)},
                                 std::pair{Distribution::planes, std::size_t(70000)}}) {

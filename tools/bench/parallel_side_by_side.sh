@@ -10,7 +10,7 @@
 # its insert(range), which sorts internally). Writes summary.md (one row per process) to OUT_DIR.
 set -eu
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-K="${KDMESH:-$here/build/kdmesh}"
+K="$(realpath "${KDMESH:-$here/build/kdmesh}")"  # absolute: the runs cd to OUT_DIR
 out="${1:-$here/out/parallel-side-by-side}"
 n="${2:-1000000}"
 dists="${DISTS:-cube axes}"
