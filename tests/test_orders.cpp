@@ -139,9 +139,10 @@ TEST(KdLocalOrder, SmallInputsEqualKdBfs) {
 // ---------------------------------------------------------------------------------------
 
 // Every point keeps its kd-bfs parent and level, each level keeps its place in the order, and
-// inside a level the points are sorted by (Hilbert key, id). Sizes below and above the
-// threshold (2^16) where the keys are computed on a second thread; repeated points have equal
-// keys, to exercise the ids.
+// inside a level of m points the points are sorted by (Hilbert key >> (b - 1), kd-bfs
+// position), b = max(1, bit_width(m - 1)) (order_kd_hilbert.cpp). Sizes below and above the
+// threshold (2^16) where the keys are computed on a second thread, and levels sorted by
+// std::sort (< 256) and by radix; repeated points have equal keys, to exercise the positions.
 TEST(KdHilbertOrder, KdBfsLevelsSortedByHilbertKey) {
   for (const auto& [dist, n] : {std::pair{Distribution::axes, std::size_t(3000)},
                                 std::pair{Distribution::planes, std::size_t(70000)}}) {
@@ -155,13 +156,20 @@ TEST(KdHilbertOrder, KdBfsLevelsSortedByHilbertKey) {
     std::vector<std::uint32_t> hint_of(pts.size());
     for (std::size_t k = 0; k < bfs.size(); ++k) hint_of[bfs.order[k]] = bfs.hint[k];
     const std::vector<std::uint64_t> keys = hilbert::point_keys(pts);
+    std::vector<std::size_t> bfs_rank(pts.size()), level_size(64, 0);
+    for (std::size_t k = 0; k < bfs.size(); ++k) {
+      bfs_rank[bfs.order[k]] = k;
+      ++level_size[bfs.level[k]];
+    }
     std::size_t equal_keys = 0;
     for (std::size_t k = 0; k < o.size(); ++k) {
       EXPECT_EQ(o.hint[k], hint_of[o.order[k]]) << what << ", rank " << k;
       if (k > 0 && o.level[k] == o.level[k - 1]) {
+        const int shift = std::max(1, int(std::bit_width(level_size[o.level[k]] - 1))) - 1;
         const std::uint32_t a = o.order[k - 1], b = o.order[k];
-        ASSERT_TRUE(keys[a] < keys[b] || (keys[a] == keys[b] && a < b)) << what << ", rank " << k;
-        equal_keys += keys[a] == keys[b];
+        const std::uint64_t ka = keys[a] >> shift, kb = keys[b] >> shift;
+        ASSERT_TRUE(ka < kb || (ka == kb && bfs_rank[a] < bfs_rank[b])) << what << ", rank " << k;
+        equal_keys += ka == kb;
       }
     }
     EXPECT_GT(equal_keys, 0u) << what;  // the repeated points at least
