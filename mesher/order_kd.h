@@ -15,9 +15,9 @@ Ordering make_kd_order(const PointSet& points, bool alternate);
 /// block (breadth-first inside it), subtrees left to right. Defined in order_kd_local.cpp.
 Ordering make_kd_local_order(Ordering bfs, std::size_t subtree_points);
 
-/// The kd-bfs order (make_kd_order(points, false)) reordered inside each level by (Hilbert
-/// key, id) (hilbert::point_keys), every point keeping its level and parent hint. Defined in
-/// order_kd_hilbert.cpp.
+/// The kd-bfs order (make_kd_order(points, false)) reordered inside each level by Hilbert key
+/// (hilbert::point_keys, truncated to leave room for the position; ties in kd-bfs order),
+/// every point keeping its level and parent hint. Defined in order_kd_hilbert.cpp.
 Ordering make_kd_hilbert_order(const PointSet& points);
 
 }  // namespace kdmesh::detail
