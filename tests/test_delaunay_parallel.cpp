@@ -20,10 +20,10 @@ namespace {
 // Below ~40k points the kernel ignores the thread count; these sizes are just above.
 constexpr std::size_t kN = 45000;
 
-DelaunayResult run(const PointSet& pts, unsigned threads) {
+DelaunayResult run(const PointSet& pts, unsigned threads, OrderKind order = OrderKind::kd_bfs) {
   DelaunayOptions o;
   o.threads = threads;
-  return delaunay(pts, make_order(pts, {OrderKind::kd_bfs, 1, 0.125}), o);
+  return delaunay(pts, make_order(pts, {order, 1, 0.125}), o);
 }
 
 std::vector<std::uint32_t> canonical_tets(const PointSet& pts, const Triangulation& tri) {
@@ -42,9 +42,10 @@ void expect_valid(const PointSet& pts, const DelaunayResult& r, const std::strin
 
 /// Runs `pts` sequentially and on `threads` threads; the parallel run must really have used
 /// rounds, be valid, and give the sequential tet set.
-void expect_same_as_sequential(const PointSet& pts, unsigned threads, const std::string& what) {
-  const DelaunayResult seq = run(pts, 1);
-  const DelaunayResult par = run(pts, threads);
+void expect_same_as_sequential(const PointSet& pts, unsigned threads, const std::string& what,
+                               OrderKind order = OrderKind::kd_bfs) {
+  const DelaunayResult seq = run(pts, 1, order);
+  const DelaunayResult par = run(pts, threads, order);
   EXPECT_EQ(seq.stats.parallel_rounds, 0u) << what;
   EXPECT_GE(par.stats.parallel_rounds, 1u) << what;
   EXPECT_EQ(par.stats.inserted, seq.stats.inserted) << what;
@@ -57,6 +58,15 @@ void expect_same_as_sequential(const PointSet& pts, unsigned threads, const std:
 TEST(ParallelDelaunay, SameTetsAsSequentialOnEveryDistribution) {
   for (Distribution d : all_distributions())
     expect_same_as_sequential(generate_points(d, kN, 4), 2, std::string(distribution_name(d)));
+}
+
+// The default order, kd-bfs-hilbert (each kd level in Hilbert order), in rounds: its levels
+// reach the slabs in a different order than kd-bfs's.
+TEST(ParallelDelaunay, DefaultOrderInRoundsGivesTheSameTets) {
+  for (Distribution d : {Distribution::axes, Distribution::planes})
+    expect_same_as_sequential(generate_points(d, kN, 5), 2,
+                              std::string(distribution_name(d)) + ", kd-bfs-hilbert",
+                              OrderKind::kd_bfs_hilbert);
 }
 
 // Three slabs per round (more workers than this machine's cores is still correct).
