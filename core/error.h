@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace kdmesh {
 
@@ -59,6 +61,19 @@ class InputError : public Error {
 class GeometryError : public Error {
  public:
   explicit GeometryError(const std::string& msg) : Error(msg, ExitCode::geometry) {}
+};
+
+/// The boundary of a solid could not be recovered by the mesher: a GeometryError that says
+/// where (3 coordinates per place: bad boundary faces' centroids, non-manifold edges'
+/// midpoints and vertices), so that a caller can refine the sizing there and try again.
+class BoundaryRecoveryError : public GeometryError {
+ public:
+  BoundaryRecoveryError(const std::string& msg, std::vector<double> where)
+      : GeometryError(msg), where_(std::move(where)) {}
+  const std::vector<double>& where() const { return where_; }
+
+ private:
+  std::vector<double> where_;
 };
 
 /// A verification (validity check, TetGen/CGAL comparison) failed.

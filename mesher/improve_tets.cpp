@@ -201,6 +201,27 @@ bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
   return true;
 }
 
+bool ImproveTets::remove(std::uint32_t t) {
+  const std::uint32_t* tv = &tv_[4 * std::size_t(t)];
+  // Each vertex w of t needs a neighbour tet (across a face of t holding w) to stand for it.
+  std::uint32_t stand_in[4];
+  for (int i = 0; i < 4; ++i) {
+    stand_in[i] = kImproveNone;
+    for (int f = 0; f < 4 && stand_in[i] == kImproveNone; ++f)
+      if (f != i && ta_[4 * std::size_t(t) + f] != kImproveNone) stand_in[i] = ta_[4 * std::size_t(t) + f] >> 2;
+    if (stand_in[i] == kImproveNone) return false;
+  }
+  for (int i = 0; i < 4; ++i) {
+    const std::uint32_t r = ta_[4 * std::size_t(t) + i];
+    if (r != kImproveNone) ta_[r] = kImproveNone;
+    if (vtet_[tv[i]] == t) vtet_[tv[i]] = stand_in[i];
+  }
+  tv_[4 * std::size_t(t)] = kImproveNone;
+  ++version_[t];
+  free_.push_back(t);
+  return true;
+}
+
 void ImproveTets::star(std::uint32_t v, std::vector<std::uint32_t>& out) const {
   // Thread-safe (no shared marks). "Seen" is a small open-addressing set on the stack (a star
   // has a few dozen tets; a larger one falls back to scanning `out`).

@@ -50,6 +50,11 @@ class ImproveTets {
   bool replace(const std::vector<std::uint32_t>& old, const std::vector<std::uint32_t>& fresh,
                std::vector<std::uint32_t>* created = nullptr);
 
+  /// Removes tet t from the domain: its faces shared with other tets become boundary faces.
+  /// Returns false (and changes nothing) if a vertex of t is in no other tet through those
+  /// faces (it would be left without a tet). The caller decides whether the new boundary is
+  /// acceptable (mesher/improve_caps.h).
+  bool remove(std::uint32_t t);
   /// The live tets incident to v, by a walk over face neighbours from vertex_tet(v).
   /// Thread-safe (reads only), as are v(), adj(), p().
   void star(std::uint32_t v, std::vector<std::uint32_t>& out) const;

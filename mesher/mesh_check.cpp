@@ -39,6 +39,12 @@ bool same_cycle(const std::array<std::uint32_t, 3>& a, const std::array<std::uin
 
 }  // namespace
 
+bool MeshCheck::only_sizing_failures() const {
+  return !failures.empty() && nonpositive_tets == 0 && flat_tets == 0 && outside_tets == 0 &&
+         offsurface_vertices == 0 && open_edges == 0 && nonmanifold_vertices == 0 &&
+         failures.size() == std::size_t(offsurface_faces > 0) + std::size_t(volume_off);
+}
+
 MeshCheck check_volume_mesh(const VolumeMesh& mesh, const PreparedSurface& surface,
                             const SurfaceQuery& query, const SizingField& sizing,
                             const MeshCheckOptions& options) {
@@ -270,7 +276,23 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const PreparedSurface& surfa
   // ---- volume ----
   c.volume_error = surface.volume != 0 ? std::fabs(c.mesh_volume - surface.volume) / std::fabs(surface.volume)
                                        : std::fabs(c.mesh_volume);
-  if (!(c.volume_error <= options.volume_tolerance)) {
+  auto add_refine = [&](std::size_t k) {
+    for (int q = 0; q < 3; ++q)
+      c.refine_at.push_back((pts.p(bnd[k][0])[q] + pts.p(bnd[k][1])[q] + pts.p(bnd[k][2])[q]) / 3);
+  };
+  for (std::size_t k = 0; k < bnd.size(); ++k)
+    if (fdist[k] > options.hausdorff_tolerance) add_refine(k);
+  c.volume_off = !(c.volume_error <= options.volume_tolerance);
+  if (c.volume_off && !bnd.empty()) {
+    std::vector<std::uint32_t> order(bnd.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = std::uint32_t(k);
+    const std::size_t top = std::max<std::size_t>(1, bnd.size() / 50);
+    std::partial_sort(order.begin(), order.begin() + std::ptrdiff_t(top), order.end(),
+                      [&](std::uint32_t a, std::uint32_t b) { return fdist[a] != fdist[b] ? fdist[a] > fdist[b] : a < b; });
+    for (std::size_t k = 0; k < top; ++k)
+      if (!(fdist[order[k]] > options.hausdorff_tolerance)) add_refine(order[k]);
+  }
+  if (c.volume_off) {
     std::ostringstream s;
     s << "mesh volume " << c.mesh_volume << " differs from the solid's " << surface.volume << " by "
       << c.volume_error * 100 << "% (tolerance " << options.volume_tolerance * 100 << "%)";

@@ -25,7 +25,15 @@ struct MeshCheck {
   std::size_t nonmanifold_vertices = 0;  ///< boundary vertices whose faces form > 1 fan
   double mesh_volume = 0, solid_volume = 0;
   double volume_error = 0;               ///< |mesh - solid| / solid
+  bool volume_off = false;               ///< volume_error beyond the tolerance
   std::vector<std::string> failures;     ///< one line per failed property, naming examples
+  /// Where a finer size would help (3 coordinates per place): the centroids of the boundary
+  /// faces beyond the distance tolerance and, when the volume is off, of the 2% of boundary
+  /// faces farthest from the surface (relative to h).
+  std::vector<double> refine_at;
+  /// True when every failure is one that a finer size can cure (faces too far from the
+  /// surface, volume error) and none is a defect of the mesh itself.
+  bool only_sizing_failures() const;
   bool ok() const { return failures.empty(); }
 };
 

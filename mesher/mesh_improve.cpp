@@ -12,6 +12,7 @@
 
 #include "core/error.h"
 #include "core/timer.h"
+#include "mesher/improve_caps.h"
 #include "mesher/improve_flips.h"
 #include "mesher/improve_quality.h"
 #include "mesher/improve_smooth.h"
@@ -243,10 +244,35 @@ std::vector<std::uint32_t> relax_pass(ImproveTets& m, double below, double floor
                    [&](std::uint32_t v) { return relax_vertex(m, v, ctx, floor); });
 }
 
+
+/// Takes out every boundary cap below `threshold` (worst first, ties by id); a tet that a
+/// removal leaves with two boundary faces is tried too. Returns how many were removed.
+std::size_t cap_pass(ImproveTets& m, SineCache& cache, double threshold, const CapContext& ctx) {
+  using Entry = std::tuple<double, std::uint32_t, std::uint32_t>;  // quality, tet, version
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
+  for (std::uint32_t t = 0; t < m.capacity(); ++t)
+    if (cache.q()[t] < threshold) heap.emplace(cache.q()[t], t, m.version(t));
+  std::size_t removed = 0;
+  while (!heap.empty()) {
+    const auto [q, t, ver] = heap.top();
+    heap.pop();
+    if (!m.alive(t) || m.version(t) != ver) continue;
+    std::uint32_t nbr[4];
+    for (int i = 0; i < 4; ++i) nbr[i] = m.adj(t, i);
+    if (!remove_cap(m, t, ctx)) continue;
+    ++removed;
+    cache.refresh(t);
+    for (std::uint32_t r : nbr)
+      if (r != kImproveNone && cache.q()[r >> 2] < threshold)
+        heap.emplace(cache.q()[r >> 2], r >> 2, m.version(r >> 2));
+  }
+  return removed;
+}
+
 }  // namespace
 
 ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
-                          const SurfaceQuery& query, const SizingField& /*sizing*/,
+                          const SurfaceQuery& query, const SizingField& sizing,
                           const ImproveOptions& options) {
   if (!(options.work_angle > 0 && options.work_angle < 90))
     throw UsageError("improve_mesh: work_angle must be in (0, 90) degrees");
@@ -284,9 +310,20 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
   const double smooth_threshold = deg_to_sine(options.smooth_angle);
   Counters c;
   SineCache cache(m, options.threads);
+  CapContext caps;
+  caps.surface = &surface;
+  caps.query = &query;
+  caps.sizing = &sizing;
+  caps.max_distance = 0.8 * options.hausdorff_tolerance;
+  const double cap_threshold = options.cap_angle > 0 ? deg_to_sine(options.cap_angle) : -1;
   for (int r = 0; r < options.rounds; ++r) {
     const std::string n = std::to_string(r + 1);
-    const std::size_t ops = flip_pass(m, cache, threshold, options.max_ring, c);
+    std::size_t ops = flip_pass(m, cache, threshold, options.max_ring, c);
+    if (cap_threshold > 0) {
+      const std::size_t removed = cap_pass(m, cache, cap_threshold, caps);
+      st.caps_removed += removed;
+      if (removed) ops += removed + flip_pass(m, cache, threshold, options.max_ring, c);
+    }
     stage("flip " + n, ops);
     if (r < options.relax_rounds) {
       const std::vector<std::uint32_t> relaxed =

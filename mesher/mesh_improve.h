@@ -25,6 +25,12 @@ struct ImproveOptions {
   double relax_below = 0.7;       ///< ... of tets whose radius ratio is below this
   int max_ring = 10;              ///< largest edge ring tried by edge removal
   bool smooth_surface = true;     ///< move surface nodes within planar patches
+  /// Take boundary caps (flat tets with two boundary faces, mesher/improve_caps.h) below this
+  /// angle out of the domain; 0 = never (the boundary face list then stays unchanged).
+  double cap_angle = 15;
+  /// Faces a cap removal exposes must lie within 0.8 x this many local sizes of the surface
+  /// (the mesh check's tolerance, with the mesher's margin).
+  double hausdorff_tolerance = 0.1;
   bool measure_stages = true;     ///< quality summary after each stage (costs a pass each)
   /// Worker threads for the vertex passes (0 = all cores). The result does not depend on it.
   unsigned threads = 0;
@@ -48,17 +54,18 @@ struct ImproveStats {
   /// the quality figures only with measure_stages.
   std::vector<ImproveStage> stages;
   std::size_t edge_removals = 0, face_removals = 0, smoothed = 0, relaxed = 0;
+  std::size_t caps_removed = 0;      ///< boundary caps taken out of the domain
   std::size_t boundary_changes = 0;  ///< boundary faces replaced (0: the boundary list is unchanged)
   double seconds = 0;
 };
 
 /// Improves `mesh` in place. Every tet stays exactly positively oriented and not flat; the
 /// boundary faces stay on the surface (boundary nodes move only within planar patches of the
-/// surface, feature nodes never; the boundary face list is unchanged, boundary_tet is
-/// recomputed); regions are kept; no node is added or removed; the result depends only on
-/// the input and the options (not on the thread count: the pass makes no random choice).
-/// `sizing` is not used yet (kept for a size-aware insertion stage). Throws UsageError for bad
-/// options.
+/// surface, feature nodes never; the boundary face list changes only where a cap is taken
+/// out, and then within the tolerance of the local size `sizing` gives; boundary_tet is
+/// recomputed); regions are kept; no node is added; the result depends only on the input and
+/// the options (not on the thread count: the pass makes no random choice). Throws UsageError
+/// for bad options.
 ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
                           const SurfaceQuery& query, const SizingField& sizing,
                           const ImproveOptions& options = {});

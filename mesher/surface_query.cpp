@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "core/error.h"
@@ -147,6 +148,27 @@ bool SurfaceQuery::box_may_touch(const double* a, const double* b) const {
   double lo[3], hi[3];
   for (int k = 0; k < 3; ++k) lo[k] = std::min(a[k], b[k]), hi[k] = std::max(a[k], b[k]);
   return impl_->boxes.may_touch(lo, hi);
+}
+
+double SurfaceQuery::ray_distance(const double* origin, const double* dir, std::uint32_t skip,
+                                  std::uint32_t* hit_facet) const {
+  if (hit_facet) *hit_facet = kNoFacet;
+  const K::Point_3 o(origin[0], origin[1], origin[2]);
+  const K::Vector_3 d(dir[0], dir[1], dir[2]);
+  const double dd = d.squared_length();
+  if (!(dd > 0) || !std::isfinite(dd)) return std::numeric_limits<double>::infinity();
+  const auto begin = impl_->triangles.cbegin();
+  const auto hit = impl_->tree.first_intersection(
+      K::Ray_3(o, d), [&](const Primitive::Id& id) { return std::uint32_t(id - begin) == skip; });
+  if (!hit) return std::numeric_limits<double>::infinity();
+  double t = std::numeric_limits<double>::infinity();
+  if (hit_facet) *hit_facet = std::uint32_t(hit->second - begin);
+  if (const K::Point_3* p = boost::get<K::Point_3>(&hit->first)) {
+    t = std::sqrt(CGAL::squared_distance(o, *p) / dd);
+  } else if (const K::Segment_3* sgm = boost::get<K::Segment_3>(&hit->first)) {
+    t = std::sqrt(std::min(CGAL::squared_distance(o, sgm->source()), CGAL::squared_distance(o, sgm->target())) / dd);
+  }
+  return t;
 }
 
 double SurfaceQuery::distance(const double* p) const {

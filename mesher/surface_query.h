@@ -24,6 +24,12 @@ class SurfaceQuery {
   double closest(const double* p, double* out, std::uint32_t* facet = nullptr) const;
   /// Distance from p to the surface.
   double distance(const double* p) const;
+  /// Distance from `origin` along the ray in direction `dir` (not necessarily unit) to its
+  /// first crossing with a facet other than `skip` (kNoFacet: none skipped), in units of
+  /// |dir|; +infinity when the ray meets no other facet. The facet hit goes to *hit (if not
+  /// null; kNoFacet when none).
+  double ray_distance(const double* origin, const double* dir, std::uint32_t skip,
+                      std::uint32_t* hit = nullptr) const;
   /// False only if no facet's bounding box meets the box spanned by a and b (exact
   /// comparisons). Then the segment ab does not meet the surface, so a and b lie strictly on
   /// the same side: a cheap way to carry a known side along a short move.

@@ -640,7 +640,17 @@ VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query
             << xyz(nodes.points.p(judge.bad_edges[k + 1]));
       for (std::size_t k = 0; k < judge.bad_vertices.size() && shown < 5; ++k, ++shown)
         msg << "; non-manifold vertex " << xyz(nodes.points.p(judge.bad_vertices[k]));
-      throw GeometryError(msg.str());
+      std::vector<double> where;  // every bad place, for a caller that refines there
+      for (std::uint32_t f : judge.bad_faces) {
+        const double *a, *b, *c;
+        face_pts(f, a, b, c);
+        for (int k = 0; k < 3; ++k) where.push_back((a[k] + b[k] + c[k]) / 3);
+      }
+      for (std::size_t k = 0; k + 1 < judge.bad_edges.size(); k += 2)
+        for (int q = 0; q < 3; ++q)
+          where.push_back((nodes.points.p(judge.bad_edges[k])[q] + nodes.points.p(judge.bad_edges[k + 1])[q]) / 2);
+      for (std::uint32_t v : judge.bad_vertices) where.insert(where.end(), nodes.points.p(v), nodes.points.p(v) + 3);
+      throw BoundaryRecoveryError(msg.str(), std::move(where));
     }
     st.dropped_nodes += dropped;
     st.steiner_points += steiner.size_count();

@@ -61,8 +61,9 @@ struct VolumeMesh {
 };
 
 /// Tetrahedralizes `nodes` (Delaunay, in options.order) and keeps the tets inside the solid;
-/// inserts Steiner points on the surface where boundary faces miss it. Throws GeometryError
-/// if the boundary cannot be recovered within max_steiner_rounds (naming where).
+/// inserts Steiner points on the surface where boundary faces miss it. Throws
+/// BoundaryRecoveryError (a GeometryError carrying the bad places) if the boundary cannot be
+/// recovered within max_steiner_rounds.
 VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query,
                        const SizingField& sizing, NodeSet nodes,
                        const VolumeMeshOptions& options = {});

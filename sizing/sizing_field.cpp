@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "sizing/curvature_sizes.h"
 #include "sizing/features.h"
 #include "sizing/plane_section.h"
 #include "sizing/segment_bvh.h"
@@ -61,6 +62,7 @@ struct SizingField::Impl {
   std::vector<PlaneZone> planes;
   std::vector<BoxZone> boxes;
   std::vector<BallZone> balls;
+  SizingAutoStats auto_stats;
 
   double eval(const double* x) const {
     double best = h_max;
@@ -117,6 +119,10 @@ const SizingOptions& SizingField::options() const {
   if (!impl_) empty_field();
   return impl_->options;
 }
+const SizingAutoStats& SizingField::auto_stats() const {
+  if (!impl_) empty_field();
+  return impl_->auto_stats;
+}
 
 SizingField build_sizing_field(const SurfaceMesh& surface, const SizingOptions& options) {
   auto finite = [](double v) { return std::isfinite(v); };
@@ -132,9 +138,15 @@ SizingField build_sizing_field(const SurfaceMesh& surface, const SizingOptions& 
   if (!(options.gradation > 0) || !finite(options.gradation))
     throw UsageError("sizing: gradation must be finite and > 0 (got " +
                      std::to_string(options.gradation) + ")");
-  if (options.curvature_angle_deg != 0)
-    throw UsageError(
-        "sizing: curvature_angle_deg (curvature-bounded size) is not implemented; leave it 0");
+  if (!(options.curvature_angle_deg >= 0 && options.curvature_angle_deg < 180))
+    throw UsageError("sizing: curvature_angle_deg must be in [0, 180) degrees (got " +
+                     std::to_string(options.curvature_angle_deg) + ")");
+  if (!(options.chordal_deviation >= 0) || !finite(options.chordal_deviation))
+    throw UsageError("sizing: chordal_deviation must be finite and >= 0 (got " +
+                     std::to_string(options.chordal_deviation) + ")");
+  if (!(options.feature_angle_deg >= 0 && options.feature_angle_deg < 180))
+    throw UsageError("sizing: feature_angle_deg must be in [0, 180) degrees (got " +
+                     std::to_string(options.feature_angle_deg) + ")");
 
   auto impl = std::make_shared<SizingField::Impl>();
   impl->options = options;
@@ -249,6 +261,18 @@ SizingField build_sizing_field(const SurfaceMesh& surface, const SizingOptions& 
       default:
         zone_error(i, z, "unknown zone kind " + std::to_string(int(z.kind)));
     }
+  }
+  for (std::size_t k = 0; k < options.derived.size(); ++k) {
+    const double w = options.derived.weight[k];
+    const double* ab = options.derived.ab.data() + 6 * k;
+    if (!(w > 0) || !finite(w) || !std::all_of(ab, ab + 6, finite))
+      throw UsageError("sizing: derived segment " + std::to_string(k) + " has a non-finite or non-positive value");
+    segs.push_back(ab, ab + 3, std::max(w, impl->h_min));
+  }
+  if (options.curvature_angle_deg > 0 || options.chordal_deviation > 0) {
+    if (const std::size_t bad = first_non_finite(surface.points); bad != surface.points.size())
+      throw UsageError("sizing: surface point " + std::to_string(bad) + " has a non-finite coordinate");
+    add_curvature_sizes(surface, impl->options, impl->h_min, segs, impl->auto_stats);
   }
   impl->segments = SegmentBvh(segs);
   return SizingField(impl);

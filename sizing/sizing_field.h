@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/surface_mesh.h"
+#include "sizing/segment_bvh.h"
 
 namespace kdmesh {
 
@@ -35,10 +36,27 @@ struct SizingOptions {
   double min_size = 0;     ///< h_min floor; 0 means max_size / 1000
   double gradation = 0.3;  ///< g: size grows by g per unit distance from a zone (> 0)
   std::vector<SizingZone> zones;
-  /// Optional curvature bound: the size on curved surface parts is at most
-  /// curvature_angle_deg (radians of it) times the local radius of curvature; 0 = off.
-  /// Not implemented yet: build_sizing_field throws UsageError when it is not 0.
+  /// Curvature bound: on the smooth (non-feature) curved parts of the surface the size is at
+  /// most curvature_angle_deg (in radians) times the local radius of curvature, so that a
+  /// boundary facet of size h sags at most h * angle / 8 below the surface (0 = off).
   double curvature_angle_deg = 0;
+  /// Chordal-deviation bound (model units; 0 = off): the mean depth h^2 / (12 r) of a
+  /// boundary facet below a surface of radius r is at most this, i.e. h <= sqrt(12 r d). The
+  /// mesher derives it from the volume tolerance of its check.
+  double chordal_deviation = 0;
+  /// Surface edges whose dihedral deviation is at least this are features, kept by nodes on
+  /// them; the curvature terms ignore them (0: every edge counts as curvature).
+  double feature_angle_deg = 0;
+  /// Segments (or points, a == b) with sizes of their own that the caller derived, e.g. the
+  /// mesher's wall-thickness term: each acts as a zone of its own size.
+  WeightedSegments derived;
+};
+
+/// What the automatic (curvature) terms did, for the notices.
+struct SizingAutoStats {
+  std::size_t curvature_edges = 0;  ///< surface edges whose curvature size is below max_size
+  double min_curvature_size = 0;    ///< the least of those sizes (0 when none)
+  double min_radius = 0;            ///< the least radius of curvature estimated there
 };
 
 /// h(x) = max(h_min, min(h_max, min over zones (size_z + g * d(x, zone)))).
@@ -51,6 +69,7 @@ class SizingField {
   double max_size() const;
   double min_size() const;
   const SizingOptions& options() const;
+  const SizingAutoStats& auto_stats() const;
 
   struct Impl;
   explicit SizingField(std::shared_ptr<const Impl> impl) : impl_(std::move(impl)) {}

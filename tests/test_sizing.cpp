@@ -16,6 +16,7 @@
 #include "sizing/plane_section.h"
 #include "sizing/segment_bvh.h"
 #include "sizing/sizing_field.h"
+#include "sizing/surface_edges.h"
 
 namespace kdmesh {
 namespace {
@@ -380,8 +381,118 @@ TEST(SizingValidation, GlobalOptions) {
   o.min_size = -1;
   expect_usage_error(cube, o, {"min_size"});
   o.min_size = 0;
-  o.curvature_angle_deg = 10;
-  expect_usage_error(cube, o, {"curvature_angle_deg", "not implemented"});
+  o.curvature_angle_deg = -1;
+  expect_usage_error(cube, o, {"curvature_angle_deg"});
+  o.curvature_angle_deg = 180;
+  expect_usage_error(cube, o, {"curvature_angle_deg"});
+  o.curvature_angle_deg = 0;
+  o.chordal_deviation = NAN;
+  expect_usage_error(cube, o, {"chordal_deviation"});
+  o.chordal_deviation = 0;
+  o.feature_angle_deg = -5;
+  expect_usage_error(cube, o, {"feature_angle_deg"});
+  o.feature_angle_deg = 0;
+  const double bad[3] = {0, 0, NAN};
+  o.derived.push_back(bad, bad, 1);
+  expect_usage_error(cube, o, {"derived segment 0"});
+}
+
+// ---- surface edges and the curvature terms ----------------------------------------------
+
+TEST(SurfaceEdges, CubeHasTwelveRightAnglesAndSixFlatDiagonals) {
+  const std::vector<SurfaceEdge> edges = surface_edges(unit_cube());
+  ASSERT_EQ(edges.size(), 18u);
+  int right = 0, flat = 0;
+  for (const SurfaceEdge& e : edges) {
+    EXPECT_TRUE(e.manifold());
+    EXPECT_LT(e.lo, e.hi);
+    right += e.deviation == std::numbers::pi / 2;
+    flat += e.deviation == 0;
+  }
+  EXPECT_EQ(right, 12);
+  EXPECT_EQ(flat, 6);
+}
+
+TEST(SurfaceEdges, OpenAndFlippedEdgesAreAlwaysFeatures) {
+  SurfaceMesh two;  // two facets running their shared edge 0-1 the same way
+  two.points.push_back(0, 0, 0);
+  two.points.push_back(1, 0, 0);
+  two.points.push_back(0, 1, 0);
+  two.points.push_back(0, -1, 0);
+  two.tris = {0, 1, 2, 0, 1, 3};
+  for (const SurfaceEdge& e : surface_edges(two)) EXPECT_EQ(e.deviation, INFINITY);
+}
+
+// A 64-sided cylinder of radius 10 (strips split into two triangles): its 64 side edges are
+// bent by 2 pi / 64; the two facets' centroids are |p_(i+1) - p_(i-1)| / 3 = 2 r sin(t) / 3
+// apart, so the estimated radius is (2/3) r sin(t) / t, about 2/3 of the true one (the safe
+// side); the strip diagonals are flat and the rims are 90 deg features.
+TEST(CurvatureSize, CylinderSideIsBoundByAngleTimesRadius) {
+  const double r = 10, t = 2 * std::numbers::pi / 64;
+  SizingOptions o = opts(20, 0.3, {});
+  o.curvature_angle_deg = 15;
+  o.feature_angle_deg = 30;
+  const SizingField h = build_sizing_field(cylinder(64, r, 30), o);
+  const double r_est = 2 * r * std::sin(t) / (3 * t);
+  const double alpha = 15 * std::numbers::pi / 180;
+  EXPECT_EQ(h.auto_stats().curvature_edges, 64u);
+  EXPECT_NEAR(h.auto_stats().min_radius, r_est, 1e-9 * r);
+  EXPECT_NEAR(h.auto_stats().min_curvature_size, alpha * r_est, 1e-9 * r);
+  // On the side surface the size is at most alpha r and at least alpha r_est.
+  for (double z : {1.0, 15.0, 29.0})
+    for (int k = 0; k < 16; ++k) {
+      const double a = 2 * std::numbers::pi * (k + 0.37) / 16;
+      const double v = at(h, r * std::cos(a) * std::cos(t / 2), r * std::sin(a) * std::cos(t / 2), z);
+      EXPECT_LE(v, alpha * r) << "z " << z << " k " << k;
+      EXPECT_GE(v, alpha * r_est - 1e-12) << "z " << z << " k " << k;
+    }
+  // On the axis, r away from every side edge: the size grows back with the gradation.
+  EXPECT_NEAR(at(h, 0, 0, 15), alpha * r_est + 0.3 * r, 1e-9);
+}
+
+TEST(CurvatureSize, ChordalDeviationBoundIsSqrtOfTwelveRadiusDepth) {
+  const double r = 10, t = 2 * std::numbers::pi / 64;
+  SizingOptions o = opts(20, 0.3, {});
+  o.chordal_deviation = 0.01;
+  o.feature_angle_deg = 30;
+  const SizingField h = build_sizing_field(cylinder(64, r, 30), o);
+  const double r_est = 2 * r * std::sin(t) / (3 * t);
+  EXPECT_NEAR(h.auto_stats().min_curvature_size, std::sqrt(12 * r_est * 0.01), 1e-9);
+  // The mean depth of a chord-sized facet, h^2 / (12 r_est), is then exactly the deviation.
+  const double hs = h.auto_stats().min_curvature_size;
+  EXPECT_NEAR(hs * hs / (12 * r_est), 0.01, 1e-12);
+}
+
+TEST(CurvatureSize, FlatAndFeatureEdgesDoNotCount) {
+  SizingOptions o = opts(2, 0.3, {});
+  o.curvature_angle_deg = 15;
+  o.chordal_deviation = 0.001;
+  o.feature_angle_deg = 30;
+  const SizingField h = build_sizing_field(unit_cube(), o);
+  EXPECT_EQ(h.auto_stats().curvature_edges, 0u);
+  EXPECT_DOUBLE_EQ(at(h, 0.5, 0.5, 0.5), 2.0);
+  // Without a feature angle every bent edge counts as curvature: the cube's 12 edges.
+  o.feature_angle_deg = 0;
+  EXPECT_EQ(build_sizing_field(unit_cube(), o).auto_stats().curvature_edges, 12u);
+}
+
+TEST(CurvatureSize, NeverBelowMinSize) {
+  SizingOptions o = opts(20, 0.3, {});
+  o.curvature_angle_deg = 15;
+  o.feature_angle_deg = 30;
+  o.min_size = 5;
+  const SizingField h = build_sizing_field(cylinder(64, 10, 30), o);
+  EXPECT_EQ(h.auto_stats().min_curvature_size, 5.0);
+  EXPECT_GE(at(h, 10, 0, 15), 5.0);
+}
+
+TEST(DerivedSegments, ActAsZonesOfTheirOwnSize) {
+  SizingOptions o = opts(2, 0.5, {});
+  const double a[3] = {0.5, 0.5, 0}, b[3] = {0.5, 0.5, 1};
+  o.derived.push_back(a, b, 0.1);
+  const SizingField h = build_sizing_field(unit_cube(), o);
+  EXPECT_NEAR(at(h, 0.5, 0.5, 0.5), 0.1, kTol);
+  EXPECT_NEAR(at(h, 0.9, 0.5, 0.5), 0.1 + 0.5 * 0.4, kTol);
 }
 
 TEST(SizingValidation, ZonesNamedByIndexAndName) {

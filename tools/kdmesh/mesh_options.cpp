@@ -60,6 +60,13 @@ MeshJob make_mesh_job(const MeshCliOptions& o) {
   if (!o.max_memory.empty()) job.max_memory = parse_memory_amount(o.max_memory, "--max-memory");
   job.repair = parse_surface_repairs(o.repair, "--repair");
   job.improve = !o.no_improve;
+  job.curvature_angle = o.curvature_angle;
+  job.chordal_deviation = o.chordal_deviation;
+  job.auto_creases = !o.no_auto_creases;
+  job.thickness_layers = o.thickness_layers;
+  job.check.hausdorff_tolerance = o.hausdorff_tolerance;
+  job.check.volume_tolerance = o.volume_tolerance;
+  job.max_refinements = o.max_refinements;
   job.msh = o.msh;
   job.inp = o.inp;
   job.medit = o.medit;
@@ -94,6 +101,35 @@ void add_mesh_job_options(CLI::App* cmd, MeshCliOptions& o, const MeshCliSpec& s
   cmd->add_option("--sharp-angle", o.sharp_angle,
                   "Feature edges kept in the mesh: dihedral deviation >= this (degrees; 0 = none)")
       ->check(CLI::Range(0.0, 179.999))
+      ->capture_default_str();
+  cmd->add_option("--curvature-angle", o.curvature_angle,
+                  "Size on curved surface parts at most this angle (degrees, as radians) times the "
+                  "radius of curvature (0 = off)")
+      ->check(CLI::Range(0.0, 90.0))
+      ->capture_default_str();
+  cmd->add_option("--chordal-deviation", o.chordal_deviation,
+                  "Mean depth of boundary faces below the curved surface, in model units (default: "
+                  "derived from --volume-tolerance; 0 = off)");
+  cmd->add_flag("--no-auto-creases", o.no_auto_creases,
+                "Do not keep surface edges bent by less than --sharp-angle as feature edges, even "
+                "where a boundary face across them would leave --hausdorff-tolerance");
+  cmd->add_option("--thickness-layers", o.thickness_layers,
+                  "Walls get at least this many tets across, gaps boundary nodes no farther apart "
+                  "than their width (0 = off)")
+      ->check(CLI::Range(0.0, 16.0))
+      ->capture_default_str();
+  cmd->add_option("--hausdorff-tolerance", o.hausdorff_tolerance,
+                  "Mesh check: every boundary face within this many local sizes h of the surface")
+      ->check(CLI::Range(1e-6, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--volume-tolerance", o.volume_tolerance,
+                  "Mesh check: mesh volume within this fraction of the solid's")
+      ->check(CLI::Range(1e-9, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--max-refinements", o.max_refinements,
+                  "Local refinements (size halved where the boundary is not recovered or not "
+                  "within tolerance, then meshed again) before giving up")
+      ->check(CLI::Range(0, 64))
       ->capture_default_str();
   cmd->add_option("--scale", o.scale, "Multiply the coordinates by this")
       ->check(CLI::PositiveNumber)

@@ -34,6 +34,13 @@ struct MeshCliOptions {
   std::string msh_version = "4.1";
   bool patch_groups = false;
   bool no_improve = false;
+  double curvature_angle = 15;     ///< degrees; 0 = no curvature term
+  double chordal_deviation = -1;   ///< < 0: derived from the volume tolerance; 0 = off
+  bool no_auto_creases = false;
+  double thickness_layers = 2;     ///< 0 = no thickness term
+  double hausdorff_tolerance = 0.1;
+  double volume_tolerance = 0.005;
+  int max_refinements = 8;
 };
 
 /// Which of the options a subcommand offers.

@@ -56,7 +56,9 @@ const std::vector<std::string> kTopKeys = {"defaults", "jobs"};
 const std::vector<std::string> kJobKeys = {"name",        "input", "scale", "size",  "min_size",
                                            "gradation",   "sharp_angle",    "zones", "order",
                                            "seed",        "check", "max_memory", "repair", "groups",
-                                           "patch_groups", "element_order", "msh_version", "improve", "output"};
+                                           "patch_groups", "element_order", "msh_version", "improve", "output",
+                                           "curvature_angle", "chordal_deviation", "auto_creases", "thickness_layers",
+                                           "tolerance", "max_refinements"};
 const std::vector<std::string> kZoneTypes = {"sharp_edges", "polyline", "segment", "plane",
                                              "point",       "box",      "ball"};
 const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes", "msh", "inp", "mesh", "boundary_vtu"};
@@ -335,6 +337,52 @@ class Loader {
       job.sharp_angle = number(v, key("sharp_angle"));
       if (!(job.sharp_angle >= 0 && job.sharp_angle < 180))
         fail(v, key("sharp_angle") + ": must be in [0, 180) degrees, got " + v.Scalar());
+    }
+    if (e.count("curvature_angle")) {
+      const YAML::Node v = e.at("curvature_angle").value;
+      job.curvature_angle = number(v, key("curvature_angle"));
+      if (!(job.curvature_angle >= 0 && job.curvature_angle <= 90))
+        fail(v, key("curvature_angle") + ": must be in [0, 90] degrees, got " + v.Scalar());
+    }
+    if (e.count("chordal_deviation")) {
+      const YAML::Node v = e.at("chordal_deviation").value;
+      if (v.IsScalar() && v.Scalar() == "auto") {
+        job.chordal_deviation = -1;
+      } else {
+        job.chordal_deviation = number(v, key("chordal_deviation"));
+        if (!(job.chordal_deviation >= 0) || !std::isfinite(job.chordal_deviation))
+          fail(v, key("chordal_deviation") + ": must be 'auto' or a finite number >= 0, got " + v.Scalar());
+      }
+    }
+    if (e.count("thickness_layers")) {
+      const YAML::Node v = e.at("thickness_layers").value;
+      job.thickness_layers = number(v, key("thickness_layers"));
+      if (!(job.thickness_layers >= 0 && job.thickness_layers <= 16))
+        fail(v, key("thickness_layers") + ": must be in [0, 16], got " + v.Scalar());
+    }
+    if (e.count("auto_creases")) job.auto_creases = boolean(e.at("auto_creases").value, key("auto_creases"));
+    if (e.count("tolerance")) {
+      const YAML::Node t = e.at("tolerance").value;
+      if (!t.IsMap()) fail(t, key("tolerance") + ": expected a map {hausdorff: H, volume: V}, got " + describe(t));
+      for (const auto& kv : t) {
+        const std::string k = kv.first.as<std::string>();
+        const double x = number(kv.second, key("tolerance") + "." + k);
+        if (k == "hausdorff") {
+          if (!(x > 0 && x <= 1)) fail(kv.second, key("tolerance.hausdorff") + ": must be in (0, 1], got " + kv.second.Scalar());
+          job.check.hausdorff_tolerance = x;
+        } else if (k == "volume") {
+          if (!(x > 0 && x <= 1)) fail(kv.second, key("tolerance.volume") + ": must be in (0, 1], got " + kv.second.Scalar());
+          job.check.volume_tolerance = x;
+        } else {
+          fail(kv.first, key("tolerance") + ": unknown key '" + k + "' (valid: hausdorff, volume)");
+        }
+      }
+    }
+    if (e.count("max_refinements")) {
+      const YAML::Node v = e.at("max_refinements").value;
+      const std::uint64_t n = unsigned_integer(v, key("max_refinements"));
+      if (n > 64) fail(v, key("max_refinements") + ": must be in [0, 64], got " + v.Scalar());
+      job.max_refinements = int(n);
     }
     if (e.count("zones")) {
       const YAML::Node z = e.at("zones").value;

@@ -29,8 +29,21 @@ namespace kdmesh {
 ///                    box: min [x,y,z], max [x,y,z]       (min <= max)
 ///                    ball: center [x,y,z], radius > 0
 ///                  mapped to SizingZone with coords packed as sizing/sizing_field.h documents
-///     order        optional order name (mesher/order.h: kd-bfs, kd-bfs-alt, kd-local, hilbert,
-///                  brio, random, input; default kd-bfs)
+///     curvature_angle   optional degrees in [0, 90] (default 15; 0 = off): size on curved
+///                  surface parts <= this angle (as radians) x the radius of curvature
+///     chordal_deviation optional 'auto' (default: from tolerance.volume), 0 (off) or a depth
+///                  in model units: the boundary facets' mean depth below the curved surface
+///     auto_creases optional bool (default true): surface edges bent by more than the angle at
+///                  which a boundary face across them would leave tolerance.hausdorff become
+///                  feature edges, even below sharp_angle
+///     thickness_layers optional number in [0, 16] (default 2; 0 = off): walls get this many
+///                  tets across, gaps boundary nodes no farther apart than their width
+///     tolerance    optional mapping {hausdorff (default 0.1, times the local size), volume
+///                  (default 0.005, relative)}: the mesh check's tolerances
+///     max_refinements optional integer in [0, 64] (default 8): local refinements (size halved
+///                  where the boundary is not recovered or not within tolerance) before failing
+///     order        optional order name (mesher/order.h: kd-bfs-hilbert, kd-bfs, kd-bfs-alt,
+///                  kd-local, hilbert, brio, random, input; default kd-bfs-hilbert)
 ///     seed         optional unsigned integer (default 1)
 ///     check        optional list of: tetgen, delaunay
 ///     max_memory   optional memory limit, e.g. 8G, 512M, none (default: the machine's memory);

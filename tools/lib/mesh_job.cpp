@@ -3,6 +3,7 @@
 #include "tools/lib/mesh_job.h"
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,7 @@
 #include <sstream>
 #include <memory>
 #include <new>
+#include <numbers>
 #include <vector>
 
 #include "core/atomic_file.h"
@@ -33,6 +35,7 @@
 #include "mesher/surface_prepare.h"
 #include "mesher/surface_query.h"
 #include "mesher/surface_repair.h"
+#include "mesher/thickness_sizes.h"
 #include "mesher/tet_compare.h"
 #include "mesher/volume_mesh.h"
 #include "sizing/features.h"
@@ -268,13 +271,206 @@ void check_memory_estimate(const MeshJob& job, const PreparedSurface& surface, c
                         "; use a larger size, or raise the limit with --max-memory (none = no limit)");
 }
 
-/// The pipeline; fills `j` as it goes, so a failure still reports what was measured. Throws.
-void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json& j) {
+/// The automatic terms of a job, derived from its tolerances and its surface.
+struct AutoTerms {
+  double feature_angle = 0;      ///< degrees: the sharp angle, lowered to the crease angle
+  double chordal_deviation = 0;  ///< model units (0 = off)
+};
+
+AutoTerms automatic_terms(const MeshJob& job, const PreparedSurface& surface) {
+  AutoTerms t;
+  t.feature_angle = job.sharp_angle;
+  if (job.auto_creases && job.sharp_angle > 0) {
+    // A boundary face of length L across a crease of deviation a lies (L/4) sin a from the
+    // surface at the crease. With L up to 1.3 h and the mesher's own margin (0.8 x the
+    // tolerance), creases bent by more than asin(4 x 0.8 x tol / 1.3) must be kept by nodes.
+    const double s = std::min(1.0, 4 * 0.8 * job.check.hausdorff_tolerance / 1.3);
+    t.feature_angle = std::min(job.sharp_angle, std::asin(s) * 180 / std::numbers::pi);
+  }
+  if (job.chordal_deviation > 0) {
+    t.chordal_deviation = job.chordal_deviation;
+  } else if (job.chordal_deviation < 0) {
+    // Half the volume tolerance spread as a mean depth over the whole surface area.
+    double area = 0;
+    const SurfaceMesh& sm = surface.mesh;
+    for (std::size_t f = 0; f < sm.num_tris(); ++f) {
+      const double *a = sm.points.p(sm.tri(f)[0]), *b = sm.points.p(sm.tri(f)[1]), *c = sm.points.p(sm.tri(f)[2]);
+      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+      const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      const double w[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+      area += std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) / 2;
+    }
+    if (area > 0 && std::isfinite(area))
+      t.chordal_deviation = 0.5 * job.check.volume_tolerance * std::fabs(surface.volume) / area;
+  }
+  return t;
+}
+
+/// The volume mesh of a job, improved and checked, with the sizing field it was made with.
+struct Meshed {
+  SizingField sizing;
+  VolumeMesh mesh;
+  MeshCheck check;
+};
+
+/// Adds a point zone of half the local size at each place of `where` (3 coordinates each)
+/// whose local size is still above min_size; returns how many it added.
+std::size_t refine_at(const std::vector<double>& where, const SizingField& sizing, SizingOptions& o) {
+  std::size_t added = 0;
+  const double floor = sizing.min_size();
+  for (std::size_t k = 0; k + 2 < where.size(); k += 3) {
+    const double h = sizing(&where[k]);
+    if (!(h > floor * (1 + 1e-9))) continue;
+    SizingZone z;
+    z.kind = SizingZone::Kind::point;
+    z.name = "refinement";
+    z.size = std::max(floor, h / 2);
+    z.coords.assign(where.begin() + std::ptrdiff_t(k), where.begin() + std::ptrdiff_t(k) + 3);
+    o.zones.push_back(std::move(z));
+    ++added;
+  }
+  return added;
+}
+
+std::string first_place(const std::vector<double>& where) {
+  std::ostringstream m;
+  m.precision(9);
+  if (where.size() >= 3) m << " (e.g. at (" << where[0] << ", " << where[1] << ", " << where[2] << "))";
+  return m.str();
+}
+
+/// Sizing field, nodes, volume mesh, improvement and mesh check; where the boundary cannot be
+/// recovered or the check finds the boundary too far from the surface, the size is halved
+/// around those places and everything from the sizing field on is done again (at most
+/// job.max_refinements times). Throws what the last attempt threw, or CheckError is left to
+/// the caller through Meshed::check.
+template <class Notice>
+Meshed mesh_with_refinement(const MeshJob& job, const PreparedSurface& surface, const SurfaceQuery& query,
+                            const FeatureEdges& features, SizingOptions options, const MeshJobCallbacks& cb,
+                            nlohmann::json& j, const Notice& notice) {
   auto log = [&](const std::string& s) {
     if (cb.log) cb.log(s);
   };
   auto progress = [&](const std::string& stage, double f) {
     if (cb.progress) cb.progress(stage, f);
+  };
+  nlohmann::json& sec = j["seconds"];
+  nlohmann::json& counts = j["counts"];
+  auto add_seconds = [&](const char* key, double t) { sec[key] = sec.value(key, 0.0) + t; };
+  const std::size_t user_zones = options.zones.size();
+  for (int attempt = 0;; ++attempt) {
+    Stopwatch clock;
+    log("sizing field (" + std::to_string(user_zones) + " zones" +
+        (attempt ? ", " + std::to_string(options.zones.size() - user_zones) + " refinement points" : std::string()) + ")");
+    Meshed m;
+    m.sizing = build_sizing_field(surface.mesh, options);
+    add_seconds("sizing", clock.seconds());
+    if (attempt == 0) {
+      const SizingAutoStats& a = m.sizing.auto_stats();
+      j["automatic_sizing"] = {{"curvature_angle", options.curvature_angle_deg},
+                               {"chordal_deviation", options.chordal_deviation},
+                               {"feature_angle", options.feature_angle_deg},
+                               {"curvature_edges", a.curvature_edges},
+                               {"min_curvature_size", a.min_curvature_size},
+                               {"min_radius", a.min_radius}};
+      if (a.curvature_edges > 0) {
+        std::ostringstream n;
+        n.precision(4);
+        n << "curvature: the size is reduced to as little as " << a.min_curvature_size << " along "
+          << a.curvature_edges << " curved surface edge(s) (radius of curvature down to " << a.min_radius
+          << "; curvature_angle " << options.curvature_angle_deg << " deg, chordal deviation "
+          << options.chordal_deviation << ")";
+        notice(n.str());
+      }
+    }
+    check_memory_estimate(job, surface, query, m.sizing, j, log);
+
+    clock.reset();
+    log("placing nodes");
+    PlacementOptions po;
+    po.seed = job.seed;
+    po.progress = progress;
+    NodeSet nodes = place_nodes(surface, query, features, m.sizing, po);
+    add_seconds("place", clock.seconds());
+    counts["placed_nodes"] = nodes.points.size();
+
+    clock.reset();
+    log("meshing " + std::to_string(nodes.points.size()) + " nodes (order " +
+        std::string(order_kind_name(job.order.kind)) + ")");
+    VolumeMeshOptions vo;
+    vo.order = job.order;
+    vo.order.seed = job.seed;
+    vo.progress = progress;
+    vo.hausdorff_tolerance = job.check.hausdorff_tolerance;
+    try {
+      m.mesh = mesh_volume(surface, query, m.sizing, std::move(nodes), vo);
+    } catch (const BoundaryRecoveryError& e) {
+      add_seconds("mesh", clock.seconds());
+      const std::size_t added = attempt < job.max_refinements ? refine_at(e.where(), m.sizing, options) : 0;
+      if (added == 0)
+        throw GeometryError(std::string(e.what()) +
+                            (attempt < job.max_refinements
+                                 ? "; the size there is already min_size " + std::to_string(m.sizing.min_size())
+                                 : "; after " + std::to_string(attempt) + " local refinement(s)"));
+      notice("boundary recovery did not converge at " + std::to_string(e.where().size() / 3) + " place(s)" +
+             first_place(e.where()) + ": size halved around " + std::to_string(added) +
+             " of them, meshing again (refinement " + std::to_string(attempt + 1) + ")");
+      continue;
+    }
+    add_seconds("mesh", clock.seconds());
+    const VolumeMeshStats& ms = m.mesh.stats;
+    sec["mesh_stages"] = {{"order", ms.order_seconds},
+                          {"delaunay", ms.delaunay_seconds},
+                          // the first, full tetrahedralization alone (the "Delaunay time")
+                          {"first_delaunay", ms.delaunay.seconds},
+                          {"classify", ms.classify_seconds},
+                          {"recover", ms.recover_seconds}};
+    std::array<std::size_t, 4> by_kind{};
+    for (NodeKind k : m.mesh.nodes.kind) ++by_kind[std::size_t(k) & 3];
+    counts["nodes"] = m.mesh.nodes.points.size();
+    counts["nodes_by_kind"] = {{"corner", by_kind[0]}, {"edge", by_kind[1]},
+                               {"surface", by_kind[2]}, {"interior", by_kind[3]}};
+    counts["steiner_points"] = ms.steiner_points;
+    counts["dropped_nodes"] = ms.dropped_nodes;
+    counts["steiner_rounds"] = ms.rounds;
+    counts["tets"] = m.mesh.num_tets();
+    counts["boundary_faces"] = m.mesh.boundary.size() / 3;
+    counts["refinements"] = attempt;
+
+    if (job.improve) {
+      clock.reset();
+      log("improving " + std::to_string(m.mesh.num_tets()) + " tets");
+      ImproveOptions io;
+      io.measure_stages = false;  // the quality block measures the result
+      io.progress = progress;
+      io.hausdorff_tolerance = job.check.hausdorff_tolerance;
+      const ImproveStats imp = improve_mesh(m.mesh, surface, query, m.sizing, io);
+      add_seconds("improve", clock.seconds());
+      counts["tets"] = m.mesh.num_tets();
+      j["improve"] = {{"edge_removals", imp.edge_removals}, {"face_removals", imp.face_removals},
+                      {"relaxed", imp.relaxed}, {"smoothed", imp.smoothed},
+                      {"boundary_changes", imp.boundary_changes}, {"caps_removed", imp.caps_removed}};
+    }
+
+    clock.reset();
+    log("checking the mesh");
+    m.check = check_volume_mesh(m.mesh, surface, query, m.sizing, job.check);
+    add_seconds("mesh_check", clock.seconds());
+    if (m.check.ok() || !m.check.only_sizing_failures()) return m;
+    const std::size_t added = attempt < job.max_refinements ? refine_at(m.check.refine_at, m.sizing, options) : 0;
+    if (added == 0) return m;  // the caller reports the failed check
+    notice("the mesh check found the boundary too far from the surface at " +
+           std::to_string(m.check.refine_at.size() / 3) + " place(s)" + first_place(m.check.refine_at) +
+           (m.check.volume_off ? " (volume off by " + std::to_string(100 * m.check.volume_error) + "%)" : std::string()) +
+           ": size halved around " + std::to_string(added) + " of them, meshing again (refinement " +
+           std::to_string(attempt + 1) + ")");
+  }
+}
+
+/// The pipeline; fills `j` as it goes, so a failure still reports what was measured. Throws.
+void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json& j) {
+  auto log = [&](const std::string& s) {
+    if (cb.log) cb.log(s);
   };
   if (!(job.scale > 0)) throw UsageError("job '" + job.name + "': scale must be > 0");
   if (!(job.sizing.max_size > 0)) throw UsageError("job '" + job.name + "': size must be > 0");
@@ -290,12 +486,13 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
   clock.reset();
   log("preparing the surface (" + std::to_string(raw.points.size()) + " points, " +
       std::to_string(raw.num_tris()) + " facets)");
-  SurfaceOptions so;
-  so.scale = job.scale;
-  so.notice = [&](const std::string& n) {
+  auto notice = [&](const std::string& n) {
     j["notices"].push_back(n);
     log("notice: " + n);
   };
+  SurfaceOptions so;
+  so.scale = job.scale;
+  so.notice = notice;
   if (job.repair.any()) {
     SurfaceRepairReport rep;
     raw = repair_surface(std::move(raw), job.repair, rep);
@@ -315,75 +512,61 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
                {"max", {surface.bbox_max[0], surface.bbox_max[1], surface.bbox_max[2]}}};
 
   clock.reset();
+  const AutoTerms terms = automatic_terms(job, surface);
   {
     std::ostringstream m;
-    m << "sharp features (angle " << job.sharp_angle << " deg)";
+    m << "sharp features (angle " << terms.feature_angle << " deg)";
     log(m.str());
   }
-  const FeatureEdges features = detect_sharp_edges(surface.mesh, job.sharp_angle);
+  const FeatureEdges features = detect_sharp_edges(surface.mesh, terms.feature_angle);
   sec["features"] = clock.seconds();
   counts["feature_edges"] = features.num_edges();
   counts["feature_corners"] = features.corners.size();
-
-  clock.reset();
-  log("sizing field (" + std::to_string(job.sizing.zones.size()) + " zones)");
-  const SizingField sizing = build_sizing_field(surface.mesh, job.sizing);
-  sec["sizing"] = clock.seconds();
+  if (terms.feature_angle < job.sharp_angle) {
+    const std::size_t sharp = detect_sharp_edges(surface.mesh, job.sharp_angle).num_edges();
+    if (features.num_edges() > sharp) {
+      std::ostringstream m;
+      m << "creases: " << features.num_edges() - sharp << " surface edge(s) bent by "
+        << terms.feature_angle << " to " << job.sharp_angle
+        << " deg are kept as feature edges (a boundary face across them would lie farther than "
+        << job.check.hausdorff_tolerance << " h from the surface); auto_creases: false turns this off";
+      notice(m.str());
+    }
+  }
 
   clock.reset();
   const SurfaceQuery query(surface.mesh);
   sec["query"] = clock.seconds();
 
-  check_memory_estimate(job, surface, query, sizing, j, log);
-
-  clock.reset();
-  log("placing nodes");
-  PlacementOptions po;
-  po.seed = job.seed;
-  po.progress = progress;
-  NodeSet nodes = place_nodes(surface, query, features, sizing, po);
-  sec["place"] = clock.seconds();
-  counts["placed_nodes"] = nodes.points.size();
-
-  clock.reset();
-  log("meshing " + std::to_string(nodes.points.size()) + " nodes (order " +
-      std::string(order_kind_name(job.order.kind)) + ")");
-  VolumeMeshOptions vo;
-  vo.order = job.order;
-  vo.order.seed = job.seed;
-  vo.progress = progress;
-  VolumeMesh mesh = mesh_volume(surface, query, sizing, std::move(nodes), vo);
-  sec["mesh"] = clock.seconds();
-  sec["mesh_stages"] = {{"order", mesh.stats.order_seconds},
-                        {"delaunay", mesh.stats.delaunay_seconds},
-                        // the first, full tetrahedralization alone (the "Delaunay time")
-                        {"first_delaunay", mesh.stats.delaunay.seconds},
-                        {"classify", mesh.stats.classify_seconds},
-                        {"recover", mesh.stats.recover_seconds}};
-  std::array<std::size_t, 4> by_kind{};
-  for (NodeKind k : mesh.nodes.kind) ++by_kind[std::size_t(k) & 3];
-  counts["nodes"] = mesh.nodes.points.size();
-  counts["nodes_by_kind"] = {{"corner", by_kind[0]}, {"edge", by_kind[1]},
-                             {"surface", by_kind[2]}, {"interior", by_kind[3]}};
-  counts["steiner_points"] = mesh.stats.steiner_points;
-  counts["dropped_nodes"] = mesh.stats.dropped_nodes;
-  counts["steiner_rounds"] = mesh.stats.rounds;
-  counts["tets"] = mesh.num_tets();
-  counts["boundary_faces"] = mesh.boundary.size() / 3;
-
-  if (job.improve) {
+  SizingOptions sizing_options = job.sizing;
+  sizing_options.curvature_angle_deg = job.curvature_angle;
+  sizing_options.chordal_deviation = terms.chordal_deviation;
+  sizing_options.feature_angle_deg = terms.feature_angle;
+  if (job.thickness_layers > 0) {
     clock.reset();
-    log("improving " + std::to_string(mesh.num_tets()) + " tets");
-    ImproveOptions io;
-    io.measure_stages = false;  // the quality block below measures the result
-    io.progress = progress;
-    const ImproveStats imp = improve_mesh(mesh, surface, query, sizing, io);
-    sec["improve"] = clock.seconds();
-    counts["tets"] = mesh.num_tets();
-    j["improve"] = {{"edge_removals", imp.edge_removals}, {"face_removals", imp.face_removals},
-                    {"relaxed", imp.relaxed}, {"smoothed", imp.smoothed},
-                    {"boundary_changes", imp.boundary_changes}};
+    ThicknessOptions to;
+    to.layers = job.thickness_layers;
+    to.max_size = job.sizing.max_size;
+    const ThicknessStats ts = add_thickness_sizes(surface, query, to, sizing_options.derived);
+    sec["thickness"] = clock.seconds();
+    j["thickness"] = {{"walls", ts.walls}, {"gaps", ts.gaps}, {"min_wall", ts.min_wall}, {"min_gap", ts.min_gap}};
+    if (ts.walls + ts.gaps > 0) {
+      std::ostringstream n;
+      n.precision(4);
+      n << "thickness: the size is reduced";
+      if (ts.walls) n << " across " << ts.walls << " facet(s) of walls thinner than " << job.thickness_layers
+                      << " x size (thinnest " << ts.min_wall << ")";
+      if (ts.gaps) n << (ts.walls ? " and" : "") << " along " << ts.gaps << " facet(s) facing a gap narrower than the size (narrowest "
+                     << ts.min_gap << ")";
+      n << "; thickness_layers: 0 turns this off";
+      notice(n.str());
+    }
   }
+  Meshed m = mesh_with_refinement(job, surface, query, features, sizing_options, cb, j, notice);
+  VolumeMesh& mesh = m.mesh;
+  const MeshCheck& check = m.check;
+  const SizingField& sizing = m.sizing;
+  j["mesh_check"] = mesh_check_json(check);
 
   bool delaunay_ok = true;
   if (job.check_tetgen || job.check_delaunay) {
@@ -395,12 +578,6 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
     j["delaunay_check"]["report"] = v.report;
     sec["delaunay_check"] = clock.seconds();
   }
-
-  clock.reset();
-  log("checking the mesh");
-  const MeshCheck check = check_volume_mesh(mesh, surface, query, sizing);
-  sec["mesh_check"] = clock.seconds();
-  j["mesh_check"] = mesh_check_json(check);
 
   clock.reset();
   TetMesh tm = to_tet_mesh(mesh);

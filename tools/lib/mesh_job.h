@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "mesher/boundary_groups.h"
+#include "mesher/mesh_check.h"
 #include "mesher/order.h"
 #include "mesher/quality.h"
 #include "mesher/surface_repair.h"
@@ -34,6 +35,28 @@ struct MeshJob {
   /// when its estimated peak memory exceeds it. 0 = the machine's physical memory; < 0 = none.
   double max_memory = 0;
   SurfaceRepairOptions repair; ///< opt-in safe surface repairs, reported as notices
+  /// Automatic sizing terms, on by default; each is announced by a notice when it shrinks the
+  /// size below what the job asks (never below sizing.min_size):
+  ///  - curvature: h <= curvature_angle (degrees, as radians) x the local radius of curvature
+  ///    of the smooth surface; 0 = off;
+  ///  - chordal deviation: the boundary facets' mean depth below the curved surface stays within
+  ///    a share of the volume tolerance (chordal_deviation < 0: derived from
+  ///    check.volume_tolerance; 0 = off; > 0: that depth in model units);
+  ///  - creases: surface edges bent by more than the angle at which a boundary face across
+  ///    them would leave the distance tolerance become feature edges (kept by nodes), even
+  ///    below sharp_angle.
+  ///  - thickness: walls get at least thickness_layers tets across, and gaps (slots, holes,
+  ///    close sheets) boundary nodes no farther apart than the gap; 0 = off.
+  double curvature_angle = 15;
+  double chordal_deviation = -1;
+  bool auto_creases = true;
+  double thickness_layers = 2;
+  /// The mesh check's tolerances (mesher/mesh_check.h); the sizing aims inside them.
+  MeshCheckOptions check;
+  /// Local refinement: when the boundary cannot be recovered, or the check finds faces too far
+  /// from the surface or the volume off, the size is halved around those places and the job
+  /// meshed again, at most this many times (and never below sizing.min_size).
+  int max_refinements = 8;
   bool improve = true;         ///< quality improvement after meshing (mesher/mesh_improve.h)
   std::string vtu, summary, nodes;  ///< output paths (usable as is); empty = not written
   /// Solver formats (usable as is; empty = not written): Gmsh MSH, Abaqus/CalculiX INP, MEDIT,

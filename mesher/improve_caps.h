@@ -1,0 +1,32 @@
+// kdmesh — boundary caps of the quality-improvement pass: a flat tet lying on the surface with
+// two boundary faces is taken out of the domain, flipping the boundary edge between those
+// faces, when the two faces it exposes lie on the surface within tolerance.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <cstdint>
+
+#include "mesher/improve_tets.h"
+#include "mesher/surface_prepare.h"
+#include "mesher/surface_query.h"
+#include "sizing/sizing_field.h"
+
+namespace kdmesh {
+
+struct CapContext {
+  const PreparedSurface* surface = nullptr;
+  const SurfaceQuery* query = nullptr;
+  const SizingField* sizing = nullptr;
+  /// The exposed faces must lie within this many local sizes of the surface (at the 7 points
+  /// the mesh check samples, and its formula h(centroid)).
+  double max_distance = 0.08;
+};
+
+/// Removes tet t if it is a cap: exactly two of its faces are boundary faces, its four
+/// vertices are surface nodes (no interior node), the boundary edge the two faces share has a
+/// surface-kind end (so it is no feature edge), the edge between its other two vertices is
+/// not a boundary edge already (the boundary stays a 2-manifold), and both faces it exposes
+/// face outward (against the normal of the closest facet) within ctx.max_distance of the
+/// surface. Returns true if it removed t.
+bool remove_cap(ImproveTets& m, std::uint32_t t, const CapContext& ctx);
+
+}  // namespace kdmesh
