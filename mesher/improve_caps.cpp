@@ -6,19 +6,14 @@
 #include <cmath>
 #include <vector>
 
+#include "mesher/improve_quality.h"
+
 namespace kdmesh {
 
 namespace {
 
 constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
-void tri_normal(const double* a, const double* b, const double* c, double* n) {
-  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  n[0] = u[1] * w[2] - u[2] * w[1];
-  n[1] = u[2] * w[0] - u[0] * w[2];
-  n[2] = u[0] * w[1] - u[1] * w[0];
-}
 
 /// The face (a, b, c), oriented outward of the domain, lies on the surface: within
 /// max_distance x h(centroid) at the mesh check's 7 sample points, and facing the way the
@@ -45,6 +40,44 @@ bool face_on_surface(const double* a, const double* b, const double* c, const Ca
   tri_normal(a, b, c, n);
   tri_normal(sm.points.p(ft[0]), sm.points.p(ft[1]), sm.points.p(ft[2]), fn);
   return n[0] * fn[0] + n[1] * fn[1] + n[2] * fn[2] > 0;
+}
+
+double segment_distance2(const double* x, const double* a, const double* b) {
+  const double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double w[3] = {x[0] - a[0], x[1] - a[1], x[2] - a[2]};
+  const double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+  const double t = dd > 0 ? std::clamp((w[0] * d[0] + w[1] * d[1] + w[2] * d[2]) / dd, 0.0, 1.0) : 0.0;
+  double r = 0;
+  for (int k = 0; k < 3; ++k) r += (w[k] - t * d[k]) * (w[k] - t * d[k]);
+  return r;
+}
+
+/// True if the mesh edge (a, b) may run along a feature edge: its midpoint lies within 5% of
+/// its length of a feature edge of the facet closest to the midpoint (or no features known).
+bool along_feature(const double* a, const double* b, const CapContext& ctx) {
+  if (!ctx.features) return true;
+  const double m[3] = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+  double cp[3];
+  std::uint32_t facet = kNoFacet;
+  ctx.query->closest(m, cp, &facet);
+  if (facet == kNoFacet) return true;
+  const SurfaceMesh& sm = ctx.surface->mesh;
+  const std::vector<std::uint32_t>& fe = ctx.features->edges;  // (lo, hi) pairs, sorted
+  const double len2 = (b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) + (b[2] - a[2]) * (b[2] - a[2]);
+  for (int j = 0; j < 3; ++j) {
+    std::uint32_t p = sm.tri(facet)[j], q = sm.tri(facet)[(j + 1) % 3];
+    if (p > q) std::swap(p, q);
+    std::size_t lo = 0, hi = fe.size() / 2;  // binary search over the pairs
+    while (lo < hi) {
+      const std::size_t mid = (lo + hi) / 2;
+      if (fe[2 * mid] < p || (fe[2 * mid] == p && fe[2 * mid + 1] < q)) lo = mid + 1;
+      else hi = mid;
+    }
+    if (lo < fe.size() / 2 && fe[2 * lo] == p && fe[2 * lo + 1] == q &&
+        segment_distance2(m, sm.points.p(p), sm.points.p(q)) <= 0.0025 * len2)
+      return true;
+  }
+  return false;
 }
 
 /// True if (a, b) is an edge of a boundary face.
@@ -85,7 +118,9 @@ bool remove_cap(ImproveTets& m, std::uint32_t t, const CapContext& ctx) {
   // The boundary faces are opposite vertices bnd[0], bnd[1]; they share the edge of the two
   // other vertices (inner[0], inner[1]), which the removal flips to (bnd[0], bnd[1]).
   const std::uint32_t k0 = v[inner[0]], k1 = v[inner[1]];
-  if (nodes.kind[k0] != NodeKind::surface && nodes.kind[k1] != NodeKind::surface) return false;
+  if (nodes.kind[k0] != NodeKind::surface && nodes.kind[k1] != NodeKind::surface &&
+      along_feature(m.p(k0), m.p(k1), ctx))
+    return false;
   if (boundary_edge(m, v[bnd[0]], v[bnd[1]])) return false;
   // The exposed faces: face `inner[j]` of t, oriented outward of the domain after the removal,
   // i.e. reversed from its orientation outward of t.

@@ -8,6 +8,7 @@
 #include "mesher/improve_tets.h"
 #include "mesher/surface_prepare.h"
 #include "mesher/surface_query.h"
+#include "sizing/features.h"
 #include "sizing/sizing_field.h"
 
 namespace kdmesh {
@@ -19,6 +20,9 @@ struct CapContext {
   /// The exposed faces must lie within this many local sizes of the surface (at the 7 points
   /// the mesh check samples, and its formula h(centroid)).
   double max_distance = 0.08;
+  /// The surface's feature edges (the mesh keeps them). Null: a cap whose boundary edge has two
+  /// feature-node ends is always kept; else only when that edge runs along a feature edge.
+  const FeatureEdges* features = nullptr;
 };
 
 /// Removes tet t if it is a cap: exactly two of its faces are boundary faces, its four

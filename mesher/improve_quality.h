@@ -119,6 +119,13 @@ inline bool tet_valid(const double* a, const double* b, const double* c, const d
   return pred::orient3d(a, b, c, d) > 0 && volume_length(a, b, c, d) >= kZeroVolumeLength;
 }
 
+/// Unnormalised normal (b - a) x (c - a) of the triangle (a, b, c).
+inline void tri_normal(const double* a, const double* b, const double* c, double* n) {
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  improve_detail::cross(u, w, n);
+}
+
 inline double deg_to_sine(double deg) { return std::sin(deg * 3.14159265358979323846 / 180); }
 
 }  // namespace kdmesh

@@ -201,6 +201,12 @@ bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
   return true;
 }
 
+std::uint32_t ImproveTets::add_interior_node(const double* p, float h) {
+  nodes_->push_back(p, NodeKind::interior, kNoFacet, h);
+  vtet_.push_back(kImproveNone);
+  return std::uint32_t(nodes_->size_count() - 1);
+}
+
 bool ImproveTets::remove(std::uint32_t t) {
   const std::uint32_t* tv = &tv_[4 * std::size_t(t)];
   // Each vertex w of t needs a neighbour tet (across a face of t holding w) to stand for it.

@@ -50,6 +50,9 @@ class ImproveTets {
   bool replace(const std::vector<std::uint32_t>& old, const std::vector<std::uint32_t>& fresh,
                std::vector<std::uint32_t>* created = nullptr);
 
+  /// Appends an interior node at p (target size h) to the node set and returns its id; it is
+  /// in no tet until a replace() uses it.
+  std::uint32_t add_interior_node(const double* p, float h);
   /// Removes tet t from the domain: its faces shared with other tets become boundary faces.
   /// Returns false (and changes nothing) if a vertex of t is in no other tet through those
   /// faces (it would be left without a tet). The caller decides whether the new boundary is

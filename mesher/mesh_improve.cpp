@@ -14,6 +14,7 @@
 #include "core/timer.h"
 #include "mesher/improve_caps.h"
 #include "mesher/improve_flips.h"
+#include "mesher/improve_split.h"
 #include "mesher/improve_quality.h"
 #include "mesher/improve_smooth.h"
 #include "mesher/improve_tets.h"
@@ -269,6 +270,31 @@ std::size_t cap_pass(ImproveTets& m, SineCache& cache, double threshold, const C
   return removed;
 }
 
+/// Splits every tet below `threshold` whose four vertices are all on the surface (worst first,
+/// ties by id). Returns how many were split.
+std::size_t split_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring) {
+  std::vector<std::pair<double, std::uint32_t>> bad;
+  const NodeSet& nodes = m.nodes();
+  for (std::uint32_t t = 0; t < m.capacity(); ++t) {
+    if (!(cache.q()[t] < threshold)) continue;
+    const std::uint32_t* v = m.v(t);
+    bool all_surface = true;
+    for (int i = 0; i < 4; ++i) all_surface = all_surface && nodes.kind[v[i]] != NodeKind::interior;
+    if (all_surface) bad.push_back({cache.q()[t], t});
+  }
+  std::sort(bad.begin(), bad.end());
+  std::size_t splits = 0;
+  std::vector<std::uint32_t> created;
+  for (const auto& [q, t] : bad) {
+    if (!m.alive(t) || !(cache.q()[t] < threshold)) continue;
+    if (!split_sliver(m, t, max_ring, nullptr, &created)) continue;
+    ++splits;
+    for (std::uint32_t n : created) cache.refresh(n);
+  }
+  if (splits) cache.refresh_all();  // the dead slots of the split rings
+  return splits;
+}
+
 }  // namespace
 
 ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
@@ -315,6 +341,11 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
   caps.query = &query;
   caps.sizing = &sizing;
   caps.max_distance = 0.8 * options.hausdorff_tolerance;
+  FeatureEdges features;
+  if (options.feature_angle > 0) {
+    features = detect_sharp_edges(surface.mesh, options.feature_angle);
+    caps.features = &features;
+  }
   const double cap_threshold = options.cap_angle > 0 ? deg_to_sine(options.cap_angle) : -1;
   for (int r = 0; r < options.rounds; ++r) {
     const std::string n = std::to_string(r + 1);
@@ -323,6 +354,11 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
       const std::size_t removed = cap_pass(m, cache, cap_threshold, caps);
       st.caps_removed += removed;
       if (removed) ops += removed + flip_pass(m, cache, threshold, options.max_ring, c);
+    }
+    if (options.split_angle > 0) {
+      const std::size_t split = split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring);
+      st.splits += split;
+      ops += split;
     }
     stage("flip " + n, ops);
     if (r < options.relax_rounds) {

@@ -28,9 +28,17 @@ struct ImproveOptions {
   /// Take boundary caps (flat tets with two boundary faces, mesher/improve_caps.h) below this
   /// angle out of the domain; 0 = never (the boundary face list then stays unchanged).
   double cap_angle = 15;
+  /// Tets below this angle whose four vertices are all on the surface (which the smoothing
+  /// cannot move apart) get a new interior node on their longest interior edge
+  /// (mesher/improve_split.h); 0 = never (no node is then added).
+  double split_angle = 12;
   /// Faces a cap removal exposes must lie within 0.8 x this many local sizes of the surface
   /// (the mesh check's tolerance, with the mesher's margin).
   double hausdorff_tolerance = 0.1;
+  /// The dihedral angle of the surface's feature edges (sizing/features.h), for the caps: a cap
+  /// may flip a boundary edge between two feature nodes only if it runs along no feature edge.
+  /// 0: unknown, such caps are kept.
+  double feature_angle = 0;
   bool measure_stages = true;     ///< quality summary after each stage (costs a pass each)
   /// Worker threads for the vertex passes (0 = all cores). The result does not depend on it.
   unsigned threads = 0;
@@ -55,6 +63,7 @@ struct ImproveStats {
   std::vector<ImproveStage> stages;
   std::size_t edge_removals = 0, face_removals = 0, smoothed = 0, relaxed = 0;
   std::size_t caps_removed = 0;      ///< boundary caps taken out of the domain
+  std::size_t splits = 0;            ///< sliver edges split (interior nodes added)
   std::size_t boundary_changes = 0;  ///< boundary faces replaced (0: the boundary list is unchanged)
   double seconds = 0;
 };
@@ -63,7 +72,7 @@ struct ImproveStats {
 /// boundary faces stay on the surface (boundary nodes move only within planar patches of the
 /// surface, feature nodes never; the boundary face list changes only where a cap is taken
 /// out, and then within the tolerance of the local size `sizing` gives; boundary_tet is
-/// recomputed); regions are kept; no node is added; the result depends only on the input and
+/// recomputed); regions are kept; nodes are added only by sliver splits; the result depends only on the input and
 /// the options (not on the thread count: the pass makes no random choice). Throws UsageError
 /// for bad options.
 ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,

@@ -7,14 +7,18 @@
 
 namespace kdmesh {
 
-/// For every surface edge that is manifold, not a feature (deviation below
-/// options.feature_angle_deg, when that is > 0) and bent (deviation > 0): the local radius of
-/// curvature r = |c0 - c1| / deviation (c0, c1 the centroids of its two facets; exact on a
-/// sphere of equilateral facets, 2/3 of the true radius on a cylinder of long strips, so on
-/// the safe side), and the size
-///   min(curvature_angle * r, sqrt(12 r chordal_deviation))   (each term only when its option is > 0),
-/// clamped to [min_size, max_size]. Edges whose size is below max_size are appended to `out`
-/// as segments weighted by that size; `stats` says how many and how small.
+/// Sizes from the curvature of the smooth (non-feature) surface, appended to `out` where
+/// below max_size; `stats` says how many and how small. A radius of curvature r asks for
+///   min(curvature_angle * r, max(sqrt(12 r chordal_deviation), d))   (each term only when its
+///   option is > 0; below the facets' own spacing d a smaller size follows them no better),
+/// clamped to [min_size, max_size]. r is measured scale by scale: on cubic cells of edge
+/// max_size, then halved, from the mean normals of neighbouring cells; where the size r asks
+/// for is at least the cell's edge, a point of that size is emitted and the cell's facets are
+/// done (a scan's roughness averages out in a cell). Features, thin walls, strong curvature
+/// and facets larger than the cells go on to finer cells, and what is left below the facets'
+/// scale is measured per surface edge: r = d / deviation, d the distance across the edge
+/// between its two facets' centroids (exact on a sphere of equilateral facets, 2/3 of the true
+/// radius on a cylinder of long strips, so on the safe side), emitted as the edge itself.
 void add_curvature_sizes(const SurfaceMesh& surface, const SizingOptions& options, double min_size,
                          WeightedSegments& out, SizingAutoStats& stats);
 

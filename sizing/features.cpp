@@ -3,6 +3,7 @@
 #include "sizing/features.h"
 
 #include "sizing/surface_edges.h"
+#include "sizing/vec3.h"
 
 #include <algorithm>
 #include <array>
@@ -11,22 +12,7 @@
 #include <numbers>
 
 namespace kdmesh {
-namespace {
-
-using Vec3 = std::array<double, 3>;
-
-Vec3 sub(const double* a, const double* b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
-
-/// Angle in radians between a and b, in [0, pi]; atan2 form, accurate near 0 and pi. A zero
-/// vector (degenerate facet or edge) gives 0 when both are zero, pi/2 otherwise (atan2(0,0)=0).
-double angle_between(const Vec3& a, const Vec3& b) { return std::atan2(norm(cross(a, b)), dot(a, b)); }
-
-}  // namespace
+using vec3::Vec3, vec3::angle_between, vec3::sub;
 
 FeatureEdges detect_sharp_edges(const SurfaceMesh& surface, double angle_deg) {
   FeatureEdges out;

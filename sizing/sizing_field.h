@@ -54,7 +54,7 @@ struct SizingOptions {
 
 /// What the automatic (curvature) terms did, for the notices.
 struct SizingAutoStats {
-  std::size_t curvature_edges = 0;  ///< surface edges whose curvature size is below max_size
+  std::size_t curvature_places = 0;  ///< surface cells and edges whose curvature size is below max_size
   double min_curvature_size = 0;    ///< the least of those sizes (0 when none)
   double min_radius = 0;            ///< the least radius of curvature estimated there
 };

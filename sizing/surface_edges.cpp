@@ -2,6 +2,8 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "sizing/surface_edges.h"
 
+#include "sizing/vec3.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -10,13 +12,7 @@
 namespace kdmesh {
 namespace {
 
-using Vec3 = std::array<double, 3>;
-
-Vec3 sub(const double* a, const double* b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+using vec3::Vec3, vec3::cross, vec3::dot, vec3::sub;
 
 /// Unnormalised outward normal of facet f: (b-a) x (c-a), following the facet's orientation.
 Vec3 facet_normal(const SurfaceMesh& s, std::size_t f) {

@@ -435,7 +435,7 @@ TEST(CurvatureSize, CylinderSideIsBoundByAngleTimesRadius) {
   const SizingField h = build_sizing_field(cylinder(64, r, 30), o);
   const double r_est = 2 * r * std::sin(t) / (3 * t);
   const double alpha = 15 * std::numbers::pi / 180;
-  EXPECT_EQ(h.auto_stats().curvature_edges, 64u);
+  EXPECT_EQ(h.auto_stats().curvature_places, 64u);
   EXPECT_NEAR(h.auto_stats().min_radius, r_est, 1e-9 * r);
   EXPECT_NEAR(h.auto_stats().min_curvature_size, alpha * r_est, 1e-9 * r);
   // On the side surface the size is at most alpha r and at least alpha r_est.
@@ -469,11 +469,11 @@ TEST(CurvatureSize, FlatAndFeatureEdgesDoNotCount) {
   o.chordal_deviation = 0.001;
   o.feature_angle_deg = 30;
   const SizingField h = build_sizing_field(unit_cube(), o);
-  EXPECT_EQ(h.auto_stats().curvature_edges, 0u);
+  EXPECT_EQ(h.auto_stats().curvature_places, 0u);
   EXPECT_DOUBLE_EQ(at(h, 0.5, 0.5, 0.5), 2.0);
   // Without a feature angle every bent edge counts as curvature: the cube's 12 edges.
   o.feature_angle_deg = 0;
-  EXPECT_EQ(build_sizing_field(unit_cube(), o).auto_stats().curvature_edges, 12u);
+  EXPECT_EQ(build_sizing_field(unit_cube(), o).auto_stats().curvature_places, 12u);
 }
 
 TEST(CurvatureSize, NeverBelowMinSize) {

@@ -370,14 +370,14 @@ Meshed mesh_with_refinement(const MeshJob& job, const PreparedSurface& surface, 
       j["automatic_sizing"] = {{"curvature_angle", options.curvature_angle_deg},
                                {"chordal_deviation", options.chordal_deviation},
                                {"feature_angle", options.feature_angle_deg},
-                               {"curvature_edges", a.curvature_edges},
+                               {"curvature_places", a.curvature_places},
                                {"min_curvature_size", a.min_curvature_size},
                                {"min_radius", a.min_radius}};
-      if (a.curvature_edges > 0) {
+      if (a.curvature_places > 0) {
         std::ostringstream n;
         n.precision(4);
         n << "curvature: the size is reduced to as little as " << a.min_curvature_size << " along "
-          << a.curvature_edges << " curved surface edge(s) (radius of curvature down to " << a.min_radius
+          << a.curvature_places << " place(s) of the curved surface (radius of curvature down to " << a.min_radius
           << "; curvature_angle " << options.curvature_angle_deg << " deg, chordal deviation "
           << options.chordal_deviation << ")";
         notice(n.str());
@@ -444,12 +444,13 @@ Meshed mesh_with_refinement(const MeshJob& job, const PreparedSurface& surface, 
       io.measure_stages = false;  // the quality block measures the result
       io.progress = progress;
       io.hausdorff_tolerance = job.check.hausdorff_tolerance;
+      io.feature_angle = options.feature_angle_deg;
       const ImproveStats imp = improve_mesh(m.mesh, surface, query, m.sizing, io);
       add_seconds("improve", clock.seconds());
       counts["tets"] = m.mesh.num_tets();
       j["improve"] = {{"edge_removals", imp.edge_removals}, {"face_removals", imp.face_removals},
                       {"relaxed", imp.relaxed}, {"smoothed", imp.smoothed},
-                      {"boundary_changes", imp.boundary_changes}, {"caps_removed", imp.caps_removed}};
+                      {"boundary_changes", imp.boundary_changes}, {"caps_removed", imp.caps_removed}, {"splits", imp.splits}};
     }
 
     clock.reset();
