@@ -270,17 +270,17 @@ std::size_t cap_pass(ImproveTets& m, SineCache& cache, double threshold, const C
   return removed;
 }
 
-/// Splits every tet below `threshold` whose four vertices are all on the surface (worst first,
-/// ties by id). Returns how many were split.
+/// Splits every tet below `threshold` with three or four vertices on the surface (the
+/// smoothing cannot move those apart; worst first, ties by id). Returns how many were split.
 std::size_t split_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring) {
   std::vector<std::pair<double, std::uint32_t>> bad;
   const NodeSet& nodes = m.nodes();
   for (std::uint32_t t = 0; t < m.capacity(); ++t) {
     if (!(cache.q()[t] < threshold)) continue;
     const std::uint32_t* v = m.v(t);
-    bool all_surface = true;
-    for (int i = 0; i < 4; ++i) all_surface = all_surface && nodes.kind[v[i]] != NodeKind::interior;
-    if (all_surface) bad.push_back({cache.q()[t], t});
+    int on_surface = 0;
+    for (int i = 0; i < 4; ++i) on_surface += nodes.kind[v[i]] != NodeKind::interior;
+    if (on_surface >= 3) bad.push_back({cache.q()[t], t});
   }
   std::sort(bad.begin(), bad.end());
   std::size_t splits = 0;
