@@ -80,7 +80,7 @@ for p in "${parts[@]}"; do
   [ -f "$root/models/real/$p" ] || { echo "real_parts: models/real/$p missing: run bash models/real/fetch.sh" >&2; exit 2; }
 done
 
-mkdir -p "$WORK/facts" "$WORK/cases" "$(dirname "$RESULTS")"
+mkdir -p "$WORK/facts" "$WORK/cases" "$(dirname "$RESULTS")" "$(dirname "$CORPUS")"
 
 # per part: facets, bbox diagonal, volume, sharpest input dihedral (cached by content hash)
 for p in "${all[@]}"; do
@@ -173,7 +173,7 @@ EOF
     vrc=0
     timeout -k 10 "$VTIMEOUT" "$PY" "$bench/verify_tets.py" "$mesh" "$src" "$h" --json "$d/verify.json" >/dev/null 2>"$d/verify_stderr.txt" || vrc=$?
   fi
-  "$PY" "$bench/real_parts_report.py" add --results "$RESULTS" --tool "$tool" --part "$part" \
+  flock "$RESULTS.lock" "$PY" "$bench/real_parts_report.py" add --results "$RESULTS" --tool "$tool" --part "$part" \
     --div "$div" --h "$h" --rc "$rc" --vrc "$vrc" --timeout "$TIMEOUT" --dir "$d" \
     --version "${VERSION[$tool]}" --cmd "${cmd[*]}"
   [ "$KEEP" = 1 ] || rm -f "$d"/*.vtu "$d"/*.msh "$d"/*.mesh "$d"/*.ele "$d"/*.node "$d"/*.face \

@@ -331,7 +331,7 @@ def cmd_report(a):
 
 def main(argv):
     ap = argparse.ArgumentParser()
-    sub = ap.add_subparsers(dest="cmd", required=True)
+    sub = ap.add_subparsers(dest="action", required=True)
     p = sub.add_parser("add")
     for k in ("results", "tool", "part", "div", "h", "rc", "vrc", "timeout", "dir", "version", "cmd"):
         p.add_argument("--" + k, required=True)
@@ -343,7 +343,7 @@ def main(argv):
     p.add_argument("--corpus", required=True)
     p.add_argument("--out", required=True)
     a = ap.parse_args(argv)
-    {"add": cmd_add, "corpus": cmd_corpus, "report": cmd_report}[a.cmd](a)
+    {"add": cmd_add, "corpus": cmd_corpus, "report": cmd_report}[a.action](a)
     return 0
 
 

@@ -14,8 +14,8 @@ the tetrahedra are used. SURFACE: .stl (ASCII or binary), .ply, .off. H: the tar
 It uses none of kdmesh's code. Pass needs all of:
   - at least one tet, every tet's signed volume > 0 (det(p1-p0, p2-p0, p3-p0) > 0: the order
     of VTK and Gmsh, and the one CGAL's MEDIT output and TetGen's .ele use);
-  - conforming: every face in at most two tets, and an interior face in its two tets with
-    opposite orientations (no folds or overlaps);
+  - conforming: no two used vertices at the same point (a crack), every face in at most two
+    tets, and an interior face in its two tets with opposite orientations (no folds/overlaps);
   - boundary (faces in one tet) closed and 2-manifold: every boundary edge in exactly two
     boundary faces, used once in each direction;
   - |mesh volume - surface volume| / surface volume <= --tol-vol (0.5 %);
@@ -428,6 +428,11 @@ def verify(mpath, spath, h, tol_vol=0.005, tol_on=1e-6):
         return res
     used = np.unique(tets)
     res["vertices"] = int(len(used))
+    # distinct vertices at the same place: a crack (the tets on either side do not share them)
+    _, cnt = np.unique(pts[used], axis=0, return_counts=True)
+    res["duplicate_vertices"] = int((cnt > 1).sum())
+    if res["duplicate_vertices"]:
+        R.append(f"{res['duplicate_vertices']} points used by two or more distinct vertices (crack)")
     vol = tet_volumes(pts, tets)
     res["nonpositive_tets"] = int((vol <= 0).sum())
     if res["nonpositive_tets"]:
