@@ -74,8 +74,11 @@ FILES=(
 #     valid but not parts; armadillo, bunny00, bear, refined_elephant, man, diplodocus are
 #     valid scans, left out for the benchmark's run time.
 #   occt-misc data/stl: bearing, motor (open edges, degenerate facets, repeated directed
-#     edges), head (10,979 open edges), TR12J_OCC64K (6 open edges).
-#   dart-doc KR5 and WAM links: base_link, shoulder, wam1-7 (open edges).
+#     edges), head (10,979 open edges), TR12J_OCC64K (6 open edges); TR12J_OCC is valid
+#     (26,966 facets), left out for run time.
+#   dart-doc (data/urdf): KR5 base_link, shoulder and WAM wam1-7 (open edges); KR5 bicep,
+#     elbow, forearm, palm, wrist and wam_base are valid, left out (the corpus has enough
+#     CAD parts; candidates for a larger run).
 #   gmsh-doc demos/api: aneurysm_data, terrain_stl_data, surface1, surface2 (open surfaces).
 # where each package keeps its copyright file
 declare -A COPYRIGHT=(
@@ -83,7 +86,6 @@ declare -A COPYRIGHT=(
   [gmsh-doc]=usr/share/doc/gmsh-doc/copyright
   [libcgal-demo]=/usr/share/doc/libcgal-dev/copyright  # libcgal-demo's own doc dir has none
   [occt-misc]=usr/share/doc/occt-misc/copyright
-  [dart-doc]=usr/share/doc/dart-doc/copyright
 )
 
 work="$(mktemp -d)"

@@ -302,7 +302,7 @@ class SurfaceDistance:
         self.s = s * 1.0000001
         self.tree = cKDTree(self.samples)
 
-    def upper(self, q, k=4):
+    def upper(self, q, k=2):
         """An upper bound of each point's distance: the exact distance to the triangles of its
         k nearest samples (usually the exact distance)."""
         q = np.asarray(q, dtype=np.float64)
