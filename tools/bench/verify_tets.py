@@ -123,23 +123,21 @@ def read_surface(path):
 def _read_tetgen(ele_path):
     base = ele_path[:-4]
 
-    def rows(p):
-        out = []
+    def table(p):
+        """The file's numbers as a 2-D array (header row dropped), comments removed."""
         with open(p) as f:
-            for line in f:
-                t = line.split("#", 1)[0].split()
-                if t:
-                    out.append(t)
-        return out
-    nr = rows(base + ".node")
-    nn, dim = int(nr[0][0]), int(nr[0][1])
-    node = np.array([[float(x) for x in r[:1 + dim]] for r in nr[1:1 + nn]])
+            lines = [ln.split("#", 1)[0] for ln in f]
+        lines = [ln for ln in lines if ln.strip()]
+        head = lines[0].split()
+        ncol = len(lines[1].split())
+        body = np.array(" ".join(lines[1:1 + int(head[0])]).split(), dtype=np.float64)
+        return head, body.reshape(int(head[0]), ncol)
+    nh, node = table(base + ".node")
     ids, pts = node[:, 0].astype(np.int64), node[:, 1:4]
-    er = rows(ele_path)
-    ne, npt = int(er[0][0]), int(er[0][1])
-    if npt != 4:
-        raise ValueError(f"{ele_path}: {npt}-node tets (only 4)")
-    ele = np.array([[int(x) for x in r[1:5]] for r in er[1:1 + ne]], dtype=np.int64)
+    eh, er = table(ele_path)
+    if int(eh[1]) != 4:
+        raise ValueError(f"{ele_path}: {eh[1]}-node tets (only 4)")
+    ele = er[:, 1:5].astype(np.int64)
     lut = np.full(ids.max() + 1, -1, dtype=np.int64)
     lut[ids] = np.arange(len(ids))
     # TetGen 1.5 writes its corners in the VTK order (checked on its own output: every tet of
