@@ -8,6 +8,7 @@
       (T, P, N) in CSV, or appends it (the file is rewritten atomically)
   real_parts_report.py corpus --out CSV 'part|package|path|flag|facts.json' ...
   real_parts_report.py report --results CSV --corpus CSV --out MD
+      (includes notes.md from the CSV's directory, hand-written, after the failure table)
 """
 import argparse
 import csv
@@ -73,12 +74,16 @@ def _error_class(tool, rc, stderr, stdout):
                                                  ln, re.I)]
         msg = errs[0] if errs else (lines[-1] if lines else "")
     else:
-        errs = [ln for ln in lines if re.search(r"error|fail|invalid|not ", ln, re.I)]
-        msg = errs[0] if errs else (lines[-1] if lines else "")
+        idx = [i for i, ln in enumerate(lines) if re.search(r"error|fail|invalid|not ", ln, re.I)]
+        msg = lines[idx[0]] if idx else (lines[-1] if lines else "")
+        if idx and msg.endswith(":") and idx[0] + 1 < len(lines):  # the detail on the next line
+            msg += " " + lines[idx[0] + 1]
+        msg = re.sub(r"^kdmesh: error: (job '[^']*': )?", "", msg)
+        msg = re.sub(r",? e\.g\. .*", "", msg)  # the examples (coordinates) of a check failure
     msg = re.sub(r"(/[^\s:'\"]+)+", "PATH", msg)
     msg = re.sub(r"'[^']*'", "'…'", msg)
     msg = re.sub(r"[-+]?\d+(\.\d+)?([eE][-+]?\d+)?", "N", msg)
-    msg = msg.replace("|", "/")[:90]
+    msg = msg.replace("|", "/")[:110]
     head = KDMESH_EXIT.get(rc, f"exit {rc}") if tool == "kdmesh" else f"exit {rc}"
     return f"{head}: {msg}" if msg else head
 
@@ -284,6 +289,12 @@ def cmd_report(a):
         for c, cases in sorted(classes.items(), key=lambda kv: -len(kv[1])):
             w(f"| {TOOL_NAMES[t]} | {c.replace('|', '/')} | {len(cases)}: {', '.join(cases)} |")
     w("")
+
+    # ---- hand-written notes beside the CSV (kept across re-runs)
+    notes = os.path.join(os.path.dirname(os.path.abspath(a.results)), "notes.md")
+    if os.path.exists(notes):
+        w(open(notes).read().rstrip())
+        w("")
 
     # ---- corpus
     w("## Corpus")
