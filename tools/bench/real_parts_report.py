@@ -6,6 +6,8 @@
                            --timeout S --dir CASEDIR --version V --cmd CMD
       reads CASEDIR/{time.txt,stderr.txt,verify.json,summary.json}; replaces the row of
       (T, P, N) in CSV, or appends it (the file is rewritten atomically)
+  real_parts_report.py reclass --results CSV --work WORKDIR
+      recomputes the error class of failed rows from WORKDIR/cases/TOOL/PART/DIV
   real_parts_report.py corpus --out CSV 'part|package|path|flag|facts.json' ...
   real_parts_report.py report --results CSV --corpus CSV --out MD
       (includes notes.md from the CSV's directory, hand-written, after the failure table)
@@ -64,7 +66,8 @@ def _time_v(path):
 def _error_class(tool, rc, stderr, stdout):
     """A short class of a failed run: the exit code's meaning and the message without numbers,
     paths and names."""
-    text = (stderr + "\n" + stdout).strip()
+    # TetGen prints its error to stdout and then aborts (stderr: "terminate called ...")
+    text = (stdout + "\n" + stderr if tool == "tetgen" else stderr + "\n" + stdout).strip()
     lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
     if tool == "gmsh":
         errs = [ln for ln in lines if ln.startswith("Error")]
@@ -84,7 +87,10 @@ def _error_class(tool, rc, stderr, stdout):
     msg = re.sub(r"'[^']*'", "'…'", msg)
     msg = re.sub(r"[-+]?\d+(\.\d+)?([eE][-+]?\d+)?", "N", msg)
     msg = msg.replace("|", "/")[:110]
-    head = KDMESH_EXIT.get(rc, f"exit {rc}") if tool == "kdmesh" else f"exit {rc}"
+    sig = {134: " (SIGABRT)", 136: " (SIGFPE)", 137: " (SIGKILL)", 139: " (SIGSEGV)"}.get(rc, "")
+    if sig and tool != "tetgen":
+        msg = ""  # a crash: the last line is only where it was
+    head = KDMESH_EXIT.get(rc, f"exit {rc}") if tool == "kdmesh" else f"exit {rc}{sig}"
     return f"{head}: {msg}" if msg else head
 
 
@@ -151,6 +157,27 @@ def cmd_add(a):
           f"min={row.get('min_dihedral', '-'):>7} wall={row['wall_s']:>7}s"
           + ("" if ok else f"  [{row.get('error_class') or row.get('reasons', '')}]"[:160]),
           flush=True)
+
+
+def cmd_reclass(a):
+    """Recomputes the error class of the failed rows from their case directories (after a
+    change of _error_class), where those still exist."""
+    rows = _read_csv(a.results)
+    n = 0
+    for r in rows:
+        d = os.path.join(a.work, "cases", r["tool"], r["part"], r["div"])
+        if r["status"] != "error" or not os.path.isdir(d):
+            continue
+
+        def rd(name):
+            p = os.path.join(d, name)
+            return open(p, errors="replace").read() if os.path.exists(p) else ""
+        c = _error_class(r["tool"], int(r["exit_code"]), rd("stderr.txt"), rd("stdout.txt"))
+        if c != r["error_class"]:
+            r["error_class"] = c
+            n += 1
+    _write_csv(a.results, rows, COLUMNS)
+    print(f"real_parts_report: {n} error classes updated")
 
 
 CORPUS_COLUMNS = ["part", "package", "source", "flag", "facets", "bbox_diag", "volume",
@@ -346,6 +373,9 @@ def main(argv):
     p = sub.add_parser("add")
     for k in ("results", "tool", "part", "div", "h", "rc", "vrc", "timeout", "dir", "version", "cmd"):
         p.add_argument("--" + k, required=True)
+    p = sub.add_parser("reclass")
+    p.add_argument("--results", required=True)
+    p.add_argument("--work", required=True)
     p = sub.add_parser("corpus")
     p.add_argument("--out", required=True)
     p.add_argument("items", nargs="*")
@@ -354,7 +384,7 @@ def main(argv):
     p.add_argument("--corpus", required=True)
     p.add_argument("--out", required=True)
     a = ap.parse_args(argv)
-    {"add": cmd_add, "corpus": cmd_corpus, "report": cmd_report}[a.action](a)
+    {"add": cmd_add, "corpus": cmd_corpus, "report": cmd_report, "reclass": cmd_reclass}[a.action](a)
     return 0
 
 

@@ -7,6 +7,7 @@ Usage:
   verify_tets.py MESH SURFACE H [--json OUT] [--tol-vol 0.005] [--tol-on 1e-6]
   verify_tets.py --surface SURFACE [--json OUT]     facts about a surface alone (corpus table)
   verify_tets.py --self-test
+  verify_tets.py --to-ply SURFACE OUT.ply           exact ASCII PLY copy (TetGen's input)
 
 MESH: .vtu/.vtk (VTK), .msh (Gmsh), .mesh (MEDIT), .ele (TetGen; the .node beside it) — only
 the tetrahedra are used. SURFACE: .stl (ASCII or binary), .ply, .off. H: the target edge length.
@@ -104,6 +105,17 @@ def read_ply(path):
     if not tris:
         raise ValueError(f"{path}: no triangles")
     return np.asarray(m.points, dtype=np.float64)[:, :3], np.concatenate(tris).astype(np.int64)
+
+
+def write_ply(path, pts, faces):
+    """ASCII PLY with every coordinate as Python's repr (the shortest text that reads back as
+    the same double: exact, also for the float32 values of a binary STL)."""
+    with open(path, "w") as f:
+        f.write(f"ply\nformat ascii 1.0\nelement vertex {len(pts)}\nproperty double x\n"
+                f"property double y\nproperty double z\nelement face {len(faces)}\n"
+                "property list uchar int vertex_indices\nend_header\n")
+        f.writelines(f"{x!r} {y!r} {z!r}\n" for x, y, z in pts.tolist())
+        f.writelines(f"3 {a} {b} {c}\n" for a, b, c in faces.tolist())
 
 
 def read_surface(path):
@@ -636,9 +648,15 @@ def main(argv):
     ap.add_argument("--tol-vol", type=float, default=0.005)
     ap.add_argument("--tol-on", type=float, default=1e-6)
     ap.add_argument("--self-test", action="store_true")
+    ap.add_argument("--to-ply", nargs=2, metavar=("SURFACE", "OUT.ply"),
+                    help="write SURFACE (vertices welded) as exact ASCII PLY, for TetGen")
     a = ap.parse_args(argv)
     if a.self_test:
         return self_test()
+    if a.to_ply:
+        pts, faces = read_surface(a.to_ply[0])
+        write_ply(a.to_ply[1], pts, faces)
+        return 0
     try:
         if a.surface_only:
             res = surface_facts(a.surface_only)
