@@ -147,10 +147,20 @@ run_case() {  # tool part div
       cmd=("$KDMESH" mesh "$src" --size "$h" -o "$mesh" --summary "$d/summary.json") ;;
     tetgen)
       local ext="${part##*.}" v
-      cp "$src" "$d/in.$ext"
+      if [ "$ext" = stl ] && "$PY" -c 'import os, struct, sys
+d = open(sys.argv[1], "rb").read(84)
+sys.exit(len(d) != 84 or 84 + 50 * struct.unpack("<I", d[80:])[0] != os.path.getsize(sys.argv[1]))' "$src"; then
+        # a binary STL (lever.stl's header starts with "solid"): TetGen would read it as ASCII
+        # ("Wrong number of vertices"), so it gets the same triangles as exact ASCII PLY
+        "$PY" "$bench/verify_tets.py" --to-ply "$src" "$d/in.ply"
+        ext=ply
+      else
+        cp "$src" "$d/in.$ext"
+      fi
       v=$("$PY" -c "import math; print('%.6g' % ($h**3 / (6*math.sqrt(2))))")
       mesh="$d/in.1.ele"
-      cmd=(tetgen -pq1.414a"$v"Q "$d/in.$ext") ;;
+      # unbuffered: TetGen aborts (uncaught int) after printing its error to stdout
+      cmd=(stdbuf -o0 tetgen -pq1.414a"$v"Q "$d/in.$ext") ;;
     gmsh)
       mesh="$d/out.msh"
       cat >"$d/in.geo" <<EOF
@@ -177,7 +187,7 @@ EOF
     vrc=0
     timeout -k 10 "$VTIMEOUT" "$PY" "$bench/verify_tets.py" "$mesh" "$src" "$h" --json "$d/verify.json" >/dev/null 2>"$d/verify_stderr.txt" || vrc=$?
   fi
-  flock "$RESULTS.lock" "$PY" "$bench/real_parts_report.py" add --results "$RESULTS" --tool "$tool" --part "$part" \
+  flock "$WORK/results.lock" "$PY" "$bench/real_parts_report.py" add --results "$RESULTS" --tool "$tool" --part "$part" \
     --div "$div" --h "$h" --rc "$rc" --vrc "$vrc" --timeout "$TIMEOUT" --dir "$d" \
     --version "${VERSION[$tool]}" --cmd "${cmd[*]}"
   [ "$KEEP" = 1 ] || rm -f "$d"/*.vtu "$d"/*.msh "$d"/*.mesh "$d"/*.ele "$d"/*.node "$d"/*.face \
