@@ -317,6 +317,38 @@ def cmd_report(a):
             w(f"| {TOOL_NAMES[t]} | {c.replace('|', '/')} | {len(cases)}: {', '.join(cases)} |")
     w("")
 
+    # ---- per part
+    w("## Per part")
+    w("")
+    w("Each cell: the result at " + ", ".join(f"/{d}" for d in divs) + " (P pass, F mesh written "
+      "but the verifier fails it, E mesher error, T timeout, · not run), then the smallest min "
+      "dihedral over the passing sizes.")
+    w("")
+    w("| part | sharpest input edge | " + " | ".join(TOOL_NAMES[t] for t in tools) + " |")
+    w("|" + "---|" * (2 + len(tools)))
+    index = {(r["tool"], r["part"], int(r["div"])): r for r in rows}
+    for part in sorted({r["part"] for r in rows}):
+        cells = []
+        for t in tools:
+            code, mins = "", []
+            for d in divs:
+                r = index.get((t, part, d))
+                if r is None:
+                    code += "·"
+                elif r["status"] == "ok" and r.get("verified") == "pass":
+                    code += "P"
+                    mins.append(_f(r["min_dihedral"]))
+                elif r["status"] == "ok":
+                    code += "F"
+                elif r["status"] == "timeout":
+                    code += "T"
+                else:
+                    code += "E"
+            cells.append(code + (f" {min(mins):.1f}°" if mins else ""))
+        sharp = corpus.get(part, {}).get("min_input_dihedral", "")
+        w(f"| {part} | {sharp}° | " + " | ".join(cells) + " |")
+    w("")
+
     # ---- hand-written notes beside the CSV (kept across re-runs)
     notes = os.path.join(os.path.dirname(os.path.abspath(a.results)), "notes.md")
     if os.path.exists(notes):
