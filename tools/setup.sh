@@ -41,6 +41,7 @@ PACKAGES=(
   libyaml-cpp-dev
   nlohmann-json3-dev
   python3-meshio
+  python3-scipy
   tetgen
   time
   valgrind
