@@ -86,7 +86,12 @@ class CheckError : public Error {
 class OutputError : public Error {
  public:
   OutputError(const std::string& file, const std::string& msg)
-      : Error(file + ": " + msg, ExitCode::output) {}
+      : Error(file + ": " + msg, ExitCode::output), file_(file), reason_(msg) {}
+  const std::string& file() const { return file_; }
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string file_, reason_;
 };
 
 /// A job refused before it starts because it would exceed a resource limit (memory).

@@ -13,6 +13,7 @@
 namespace kdmesh {
 
 std::string format_bytes(double bytes) {
+  if (!std::isfinite(bytes)) return "an unbounded amount";
   const char* units[] = {"bytes", "kB", "MB", "GB", "TB", "PB"};
   int u = 0;
   while (bytes >= 1000 && u < 5) {

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "core/point_set.h"
 
+#include <algorithm>
+
 #include <cfloat>
 #include <cmath>
 
@@ -25,6 +27,15 @@ int unit_scale_exponent(const PointSet& points) {
   const int k = -e;
   if (std::ldexp(lo, k) < DBL_MIN) return 0;  // would lose bits of the smallest coordinate
   return k;
+}
+
+int magnitude_scale_exponent(const PointSet& points) {
+  double hi = 0;
+  for (const double v : points.xyz) hi = std::max(hi, std::fabs(v));
+  if (hi == 0 || !std::isfinite(hi)) return 0;
+  int e;
+  std::frexp(hi, &e);
+  return -e;
 }
 
 PointSet scaled_copy(const PointSet& points, int exponent) {

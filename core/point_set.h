@@ -32,6 +32,12 @@ std::size_t first_non_finite(const PointSet& points);
 /// magnitudes move to where volumes and third-party tolerances behave (e.g. 1e+-200 inputs).
 int unit_scale_exponent(const PointSet& points);
 
+/// The exponent k that brings the largest |coordinate| into [0.5, 1) (0 for none or non-finite
+/// ones), even when the smallest coordinates then lose low bits or underflow: for
+/// floating-point measures such as volumes, which must neither overflow nor lose the largest
+/// terms, and are compared with a relative tolerance anyway.
+int magnitude_scale_exponent(const PointSet& points);
+
 /// points * 2^exponent, coordinate by coordinate (std::ldexp; exact for unit_scale_exponent).
 PointSet scaled_copy(const PointSet& points, int exponent);
 

@@ -6,18 +6,25 @@
 #include <string>
 #include <string_view>
 #include <cstddef>
+#include <cstdint>
 #include <system_error>
 
 namespace kdmesh {
 
-/// The complete contents of `path` (regular files in one read of the right size, pipes and
-/// special files grown geometrically). Throws InputError naming the file and strerror if it
-/// cannot be opened, stat'ed or read, or is a directory. An empty file gives "".
-std::string read_whole_file(const std::string& path);
+/// The complete contents of the regular file `path`, in one read of the right size. Throws
+/// InputError naming the file: with strerror if it cannot be opened, stat'ed or read; if it is
+/// not a regular file (a directory, device such as /dev/zero, FIFO or socket, also through a
+/// symbolic link: refused at once, never read, never waited on); or if it holds more than
+/// `max_bytes` (0: default_read_limit()). An empty file gives "".
+std::string read_whole_file(const std::string& path, std::uint64_t max_bytes = 0);
 
-/// Writes raw bytes to a new file at `file` (usually an AtomicFile's temporary path); errors
-/// are OutputErrors naming `report_as` (the path the user asked for): "cannot create",
-/// "write failed", "close failed". The destructor closes the file if close() was not reached.
+/// The default bound of read_whole_file: half the machine's physical memory (16 GiB if unknown).
+std::uint64_t default_read_limit();
+
+/// Writes raw bytes to the existing regular file `file` (an AtomicFile's temporary path, which
+/// AtomicFile created exclusively), truncating it; symbolic links are not followed. Errors are
+/// OutputErrors naming `report_as` (the path the user asked for) with the errno text:
+/// "cannot open for writing", "write failed", "close failed". The destructor closes the file if close() was not reached.
 class FileWriter {
  public:
   FileWriter(const std::string& file, std::string report_as);

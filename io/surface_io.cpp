@@ -291,12 +291,87 @@ SurfaceMesh read_stl_ascii(const std::string& path, std::string_view data) {
 // PLY
 // ---------------------------------------------------------------------------------------------
 
-/// Collects faces (file vertex indices) and fan-triangulates them into `tris`.
+/// Triangulates the polygon `poly` (point ids into `xyz`, 3 doubles each) by ear clipping in
+/// its plane (projected along the largest component of its Newell normal), appending n - 2
+/// triangles with the polygon's orientation to `out`. A convex polygon gives its fan from the
+/// first vertex. False (nothing appended) when no ear is found: a self-intersecting or
+/// degenerate polygon.
+bool ear_clip(const std::vector<std::uint32_t>& poly, const std::vector<double>& xyz, std::uint32_t* out) {
+  const std::size_t n = poly.size();
+  double nrm[3] = {0, 0, 0};
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* a = &xyz[3 * std::size_t(poly[i])];
+    const double* b = &xyz[3 * std::size_t(poly[(i + 1) % n])];
+    nrm[0] += (a[1] - b[1]) * (a[2] + b[2]);
+    nrm[1] += (a[2] - b[2]) * (a[0] + b[0]);
+    nrm[2] += (a[0] - b[0]) * (a[1] + b[1]);
+  }
+  int drop = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::fabs(nrm[k]) > std::fabs(nrm[drop])) drop = k;
+  if (!(std::fabs(nrm[drop]) > 0)) return false;
+  const int ix = (drop + 1) % 3, iy = (drop + 2) % 3;
+  const double sign = nrm[drop] > 0 ? 1 : -1;  // counter-clockwise in the projection
+  auto x = [&](std::uint32_t v) { return xyz[3 * std::size_t(v) + std::size_t(ix)]; };
+  auto y = [&](std::uint32_t v) { return xyz[3 * std::size_t(v) + std::size_t(iy)]; };
+  auto cross = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+    return sign * ((x(b) - x(a)) * (y(c) - y(a)) - (y(b) - y(a)) * (x(c) - x(a)));
+  };
+  std::vector<std::uint32_t> ring = poly;
+  std::size_t written = 0;
+  while (ring.size() > 3) {
+    bool clipped = false;
+    const std::size_t m = ring.size();
+    for (std::size_t k = 0; k < m && !clipped; ++k) {
+      const std::size_t i = (k + 1) % m;  // from the second vertex: a convex polygon gives its fan
+      const std::uint32_t a = ring[(i + m - 1) % m], b = ring[i], c = ring[(i + 1) % m];
+      if (!(cross(a, b, c) > 0)) continue;  // reflex or flat corner: not an ear
+      bool empty = true;
+      for (std::size_t k = 0; k < m && empty; ++k) {
+        const std::uint32_t p = ring[k];
+        if (p == a || p == b || p == c) continue;
+        empty = !(cross(a, b, p) >= 0 && cross(b, c, p) >= 0 && cross(c, a, p) >= 0);
+      }
+      if (!empty) continue;
+      out[written++] = a;
+      out[written++] = b;
+      out[written++] = c;
+      ring.erase(ring.begin() + long(i));
+      clipped = true;
+    }
+    if (!clipped) return false;
+  }
+  out[written++] = ring[0];
+  out[written++] = ring[1];
+  out[written++] = ring[2];
+  return true;
+}
+
+/// Collects faces (file vertex indices) and fan-triangulates them into `tris`; polygons of
+/// more than 3 vertices are remembered, to be triangulated properly (ear_clip) once the
+/// vertices are known.
 struct FaceSink {
   const std::string& path;
   std::uint64_t num_vertices;
   std::vector<std::uint32_t>& tris;
   std::vector<std::uint32_t> poly;
+  struct Polygon {
+    std::size_t first_tri;  ///< offset in tris of its fan
+    std::size_t begin, end; ///< its vertices in `polygon_vertices`
+  };
+  std::vector<Polygon> polygons;
+  std::vector<std::uint32_t> polygon_vertices;
+
+  /// Replaces each remembered polygon's fan by its ear-clipped triangulation (kept when the
+  /// polygon has no ear: prepare_surface then reports the fan's defects).
+  void triangulate_polygons(const std::vector<double>& xyz) {
+    std::vector<std::uint32_t> ring;
+    for (const Polygon& p : polygons) {
+      ring.assign(polygon_vertices.begin() + long(p.begin), polygon_vertices.begin() + long(p.end));
+      std::vector<std::uint32_t> out(3 * (ring.size() - 2));
+      if (ear_clip(ring, xyz, out.data())) std::copy(out.begin(), out.end(), tris.begin() + long(p.first_tri));
+    }
+  }
 
   /// `where`: "line N" / "byte offset N" context for messages (built lazily by the caller).
   template <class Where>
@@ -305,6 +380,10 @@ struct FaceSink {
       throw InputError(path, line,
                        "face " + std::to_string(face) + " (0-based" + where() + ") has " +
                            std::to_string(poly.size()) + " vertices; at least 3 are needed");
+    if (poly.size() > 3) {
+      polygons.push_back({tris.size(), polygon_vertices.size(), polygon_vertices.size() + poly.size()});
+      polygon_vertices.insert(polygon_vertices.end(), poly.begin(), poly.end());
+    }
     for (std::size_t k = 1; k + 1 < poly.size(); ++k) {
       tris.push_back(poly[0]);
       tris.push_back(poly[k]);
@@ -359,7 +438,7 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
   SurfaceMesh mesh;
   std::vector<double> raw(3 * vert_el->count);
   mesh.tris.reserve(3 * face_el->count);
-  FaceSink sink{path, vert_el->count, mesh.tris, {}};
+  FaceSink sink{path, vert_el->count, mesh.tris, {}, {}, {}};
 
   if (h.format == PlyFormat::ascii) {
     Tokens tok(data.substr(h.data_offset), h.data_first_line);
@@ -479,6 +558,7 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
     }
   }
   if (mesh.tris.size() / 3 > 0xFFFFFFFFull) throw InputError(path, 0, "more than 2^32-1 triangles");
+  sink.triangulate_polygons(raw);
 
   // Weld and renumber.
   const std::size_t nv = vert_el->count;
@@ -561,28 +641,30 @@ SurfaceMesh read_surface(const std::string& path) {
 }
 
 SurfaceMesh read_stl(const std::string& path) {
-  const std::string data = read_surface_file(path);
+  const std::string raw = read_surface_file(path);
+  // Ascii text: a UTF-8 byte order mark (some Windows editors write one) is not part of it.
+  const std::string_view text = std::string_view(raw).substr(raw.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0);
   // The size rule alone decides binary: 84 + 50 * count == file size.
-  if (data.size() >= 84) {
+  if (raw.size() >= 84) {
     const std::uint32_t count =
-        load_le<std::uint32_t>(reinterpret_cast<const unsigned char*>(data.data()) + 80);
+        load_le<std::uint32_t>(reinterpret_cast<const unsigned char*>(raw.data()) + 80);
     const std::uint64_t expect = 84 + 50 * std::uint64_t(count);
-    if (expect == data.size()) return read_stl_binary(path, data);
+    if (expect == raw.size()) return read_stl_binary(path, raw);
     // Not a binary STL by size. An ascii STL starts with "solid" and holds text only.
     std::size_t i = 0;
-    while (i < data.size() && std::isspace(static_cast<unsigned char>(data[i]))) ++i;
-    const bool solid = data.size() - i >= 5 && iequals(std::string_view(data).substr(i, 5), "solid");
-    const bool has_nul = std::memchr(data.data(), '\0', std::min<std::size_t>(data.size(), 4096)) != nullptr;
+    while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
+    const bool solid = text.size() - i >= 5 && iequals(text.substr(i, 5), "solid");
+    const bool has_nul = std::memchr(text.data(), '\0', std::min<std::size_t>(text.size(), 4096)) != nullptr;
     if (!solid || has_nul)
       throw InputError(path, 0,
                        "not a valid STL file: as binary STL its header (byte offset 80) declares " +
                            std::to_string(count) + " triangles, which needs " +
                            std::to_string(expect) + " bytes, but the file has " +
-                           std::to_string(data.size()) +
+                           std::to_string(raw.size()) +
                            " bytes (truncated, or a wrong triangle count); it is not ascii STL either" +
                            (solid ? " (it contains binary NUL bytes)" : " (it does not start with 'solid')"));
   }
-  return read_stl_ascii(path, data);
+  return read_stl_ascii(path, text);
 }
 
 SurfaceMesh read_ply(const std::string& path) {

@@ -144,14 +144,19 @@ ValidityReport check_delaunay(const PointSet& points, const Triangulation& tri,
   }
 
   // 4. The tets cover the convex hull exactly once: compare volumes with an independent hull.
-  //    Compared at unit scale (an exact power-of-two rescaling), so that 1e+-200 inputs
-  //    neither overflow nor underflow; reported in the input's units.
-  const UnitScaled unit(points);
-  const int k = unit.exponent();
-  const double volume = total_volume(unit.points(), finite_tets(tri));
-  const double hull = convex_hull_volume(unit.points());
+  //    Compared with the largest coordinate scaled into [0.5, 1) (a power-of-two rescaling),
+  //    so that large inputs do not overflow (1e+104: inf vs inf), also when they are mixed
+  //    with tiny ones (1e-300), whose volumes are negligible against the tolerance; reported
+  //    in the input's units (inf when beyond double range).
+  const int k = magnitude_scale_exponent(points);
+  const PointSet scaled = k != 0 ? scaled_copy(points, k) : points;
+  const double volume = total_volume(scaled, finite_tets(tri));
+  const double hull = convex_hull_volume(scaled);
   r.volume = std::ldexp(volume, -3 * k);
   r.hull_volume = std::ldexp(hull, -3 * k);
+  r.scaled_volume = volume;
+  r.scaled_hull_volume = hull;
+  r.volume_exponent = k;
   r.volume_matches = std::fabs(volume - hull) <= 1e-9 * std::max(std::fabs(hull), 1e-300);
   if (!r.volume_matches)
     problem("total tet volume " + std::to_string(r.volume) + " differs from the convex hull's " +

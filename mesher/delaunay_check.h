@@ -20,8 +20,12 @@ struct ValidityReport {
   /// circumsphere (or in the plane and on the circumcircle of a hull face). When this is 0,
   /// the Delaunay tetrahedralization is unique and every correct kernel must return it.
   std::size_t tie_faces = 0;
-  double volume = 0;       ///< sum of finite tet volumes
+  double volume = 0;       ///< sum of finite tet volumes (inf when beyond double range)
   double hull_volume = 0;  ///< convex hull volume from an independent computation (CGAL)
+  /// The same two at scale 2^volume_exponent (magnitude_scale_exponent: the largest
+  /// coordinate in [0.5, 1)), where they were compared: volume = scaled_volume * 2^(-3 k).
+  double scaled_volume = 0, scaled_hull_volume = 0;
+  int volume_exponent = 0;
   bool volume_matches = false;
   std::vector<std::string> problems;  ///< the first few faults, naming tets and point ids
 

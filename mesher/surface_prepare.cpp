@@ -182,23 +182,39 @@ PreparedSurface prepare_surface(SurfaceMesh mesh, const std::string& source,
     std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
       return std::tie(a.v[0], a.v[1], a.v[2], a.f) < std::tie(b.v[0], b.v[1], b.v[2], b.f);
     });
+    // A facet's orientation: whether its corners are an even permutation of the sorted ones.
+    auto even = [&](std::uint32_t f) {
+      const std::uint32_t* t = mesh.tri(f);
+      const std::size_t lo = std::size_t(std::min_element(t, t + 3) - t);
+      return t[(lo + 1) % 3] < t[(lo + 2) % 3];
+    };
     std::vector<std::uint32_t> bad;
-    std::size_t groups = 0;
+    std::size_t groups = 0, opposite = 0;  // opposite: groups with copies facing both ways
     for (std::size_t i = 0; i < nf;) {
       std::size_t j = i + 1;
       while (j < nf && std::equal(keys[j].v, keys[j].v + 3, keys[i].v)) ++j;
       if (j - i > 1) {
         ++groups;
-        for (std::size_t k = i; k < j; ++k) bad.push_back(keys[k].f);
+        bool both = false;
+        for (std::size_t k = i; k < j; ++k) {
+          bad.push_back(keys[k].f);
+          both |= even(keys[k].f) != even(keys[i].f);
+        }
+        opposite += both;
       }
       i = j;
     }
     if (!bad.empty()) {
-      // Name the duplicates grouped, in order of each group's first facet.
+      // Name the duplicates grouped, in order of each group's first facet. The duplicates
+      // repair removes same-way copies only: it is hinted at only when that fixes every group.
       fail(source, "duplicated facets: " + std::to_string(groups) +
                        " group(s) of facets with the same 3 points, " + std::to_string(bad.size()) +
-                       " facets in all: " + list_facets(bad),
-           bad, SurfaceError::Defect::duplicates);
+                       " facets in all: " + list_facets(bad) +
+                       (opposite ? "; " + std::to_string(opposite) +
+                                       " group(s) face both ways (solids touching along a face, or a "
+                                       "two-sided sheet): no repair applies, separate or merge the solids"
+                                 : std::string()),
+           bad, opposite ? SurfaceError::Defect::other : SurfaceError::Defect::duplicates);
     }
   }
 

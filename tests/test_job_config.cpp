@@ -72,7 +72,10 @@ jobs:
       summary: block.json
       nodes: /abs/block.xyz
 )");
-  const BatchConfig c = kdmesh::load_batch_config(file.string(), "results");
+  kdmesh::BatchLoadOptions lo;
+  lo.out_dir = "results";
+  lo.allow_outside_out_dir = true;  // the absolute path (refused without it: test_cli_outputs)
+  const BatchConfig c = kdmesh::load_batch_config(file.string(), lo);
   ASSERT_EQ(c.jobs.size(), 1u);
   const kdmesh::MeshJob& j = c.jobs[0];
   EXPECT_EQ(j.name, "block-1.fine_A");
@@ -320,7 +323,10 @@ TEST(JobConfig, SolverOutputsAndBoundaryVtu) {
     size: 1
     output: {boundary_vtu: /abs/b-boundary.vtu}
 )");
-  const BatchConfig c = kdmesh::load_batch_config(file.string(), "results");
+  kdmesh::BatchLoadOptions lo;
+  lo.out_dir = "results";
+  lo.allow_outside_out_dir = true;
+  const BatchConfig c = kdmesh::load_batch_config(file.string(), lo);
   ASSERT_EQ(c.jobs.size(), 2u);
   EXPECT_EQ(c.jobs[0].msh, "results/a.msh");
   EXPECT_EQ(c.jobs[0].inp, "results/a.inp");
@@ -348,7 +354,7 @@ TEST(JobConfig, SolverOutputsAndBoundaryVtu) {
   const InputError same = load_error("jobs:\n  - {name: a, input: parts/block.stl, size: 1,\n"
                                      "     output: {vtu: a.vtu, boundary_vtu: a.vtu}}\n");
   EXPECT_EQ(same.line(), 3u);
-  EXPECT_TRUE(contains(same.what(), "'a.vtu' (boundary_vtu) is also written by this job (vtu)")) << same.what();
+  EXPECT_TRUE(contains(same.what(), "a.vtu' (boundary_vtu) is also written by this job (vtu)")) << same.what();
   const InputError shared = load_error(R"(jobs:
   - {name: a, input: parts/block.stl, size: 1, output: {msh: m.msh}}
   - {name: b, input: parts/block.stl, size: 1, output: {boundary_vtu: m.msh}}

@@ -36,6 +36,11 @@ void Output::emit_json(const nlohmann::json& j) const {
   if (json) std::cout << j.dump(2) << std::endl;
 }
 
+CLI::Validator non_empty_path() {
+  return CLI::Validator(
+      [](std::string& value) { return value.empty() ? std::string("the path is empty") : std::string(); }, "PATH");
+}
+
 void add_output_flags(CLI::App* cmd, Output& out) {
   cmd->add_flag("--json", out.json, "Print a machine-readable JSON summary on stdout");
   cmd->add_flag("-q,--quiet", out.quiet, "No progress messages on stderr");

@@ -24,6 +24,9 @@ struct Output {
   void emit_json(const nlohmann::json& j) const;
 };
 
+/// A check for path options: an empty value ("") is an error, not "no output".
+CLI::Validator non_empty_path();
+
 /// Adds --json and --quiet to a subcommand.
 void add_output_flags(CLI::App* cmd, Output& out);
 

@@ -31,6 +31,8 @@ struct Options {
   std::string out_dir;
   std::vector<std::string> only;
   std::string max_memory;  ///< for jobs that set none
+  double timeout = 0;      ///< for jobs that set none (seconds; 0 = none)
+  bool allow_outside = false;
   Output out;
 };
 
@@ -87,12 +89,16 @@ void print_table(std::ostream& os, const std::vector<MeshJobResult>& results) {
 int run_batch(const Options& o) {
   const Output& out = o.out;
   Stopwatch total;
-  const BatchConfig config = load_batch_config(o.file, o.out_dir);  // InputError: exit 3
+  BatchLoadOptions lo;
+  lo.out_dir = o.out_dir;
+  lo.allow_outside_out_dir = o.allow_outside;
+  const double limit = o.max_memory.empty() ? 0 : parse_memory_amount(o.max_memory, "--max-memory");
+  lo.max_memory = limit;
+  const BatchConfig config = load_batch_config(o.file, lo);  // InputError: exit 3
   std::vector<MeshJob> jobs = select_jobs(config, o.only);
-  if (!o.max_memory.empty()) {
-    const double limit = parse_memory_amount(o.max_memory, "--max-memory");
-    for (MeshJob& j : jobs)
-      if (j.max_memory == 0) j.max_memory = limit;
+  for (MeshJob& j : jobs) {
+    if (j.max_memory == 0) j.max_memory = limit;
+    if (j.timeout == 0) j.timeout = o.timeout;
   }
   const unsigned workers = std::max(1u, std::min<unsigned>(o.jobs, unsigned(jobs.size())));
   out.stage(std::to_string(jobs.size()) + " job" + (jobs.size() == 1 ? "" : "s") + " from " +
@@ -175,7 +181,14 @@ void add_batch_command(CLI::App& app, Runner& run) {
       ->check(CLI::Range(1u, 1024u))
       ->capture_default_str();
   cmd->add_option("--out-dir", o->out_dir,
-                  "Directory relative output paths are resolved against (default: current)");
+                  "Directory the outputs are written in: relative output paths are resolved against it "
+                  "and must stay inside it (default: the batch file's directory)")
+      ->check(non_empty_path());
+  cmd->add_flag("--allow-outside-out-dir", o->allow_outside,
+                "Accept output paths outside --out-dir (absolute, '..', symbolic links leading out)");
+  cmd->add_option("--timeout", o->timeout,
+                  "Stop a job that sets no timeout after this many seconds; it fails with exit 7 (0: none)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--only", o->only, "Run only the named jobs (repeatable)")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)

@@ -125,7 +125,8 @@ void add_compare_tetgen_command(CLI::App& app, Runner& run) {
   cmd->add_option("--tetgen-timeout", o->timeout, "Stop TetGen after this many seconds (0: no limit)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd->add_option("--keep", o->keep, "Also write both meshes there: kdmesh.vtu and tetgen.vtu");
+  cmd->add_option("--keep", o->keep, "Also write both meshes there: kdmesh.vtu and tetgen.vtu")
+      ->check(non_empty_path());
   add_output_flags(cmd, o->out);
   const CLI::Option* help = cmd->get_help_ptr();
   cmd->callback([o, help, job_options, &run] {

@@ -18,6 +18,7 @@
 #include "mesher/tet_compare.h"
 #include "tools/kdmesh/cli.h"
 #include "tools/lib/delaunay_verify.h"
+#include "tools/lib/job_paths.h"
 
 namespace kdmesh::cli {
 
@@ -73,6 +74,7 @@ int run_delaunay(const Options& o) {
   Stopwatch total, clock;
   nlohmann::json j = {{"command", "delaunay"}, {"input", o.input}, {"order", o.order}, {"kernel", o.kernel}};
 
+  check_run_paths(o.input, {{"-o", o.output}});  // before any work
   out.stage("reading " + o.input);
   const PointSet pts = read_points(o.input);
   const double t_read = clock.seconds();
@@ -267,7 +269,7 @@ void add_delaunay_command(CLI::App& app, Runner& run) {
   cmd->add_option("--max-memory", o->max_memory,
                   "Refuse the run (exit 7) if its estimated peak memory exceeds this, e.g. 8G, "
                   "none (default: the machine's memory)");
-  cmd->add_option("-o,--output", o->output, "Output .vtu file (binary, compressed)");
+  cmd->add_option("-o,--output", o->output, "Output .vtu file (binary, compressed)")->check(non_empty_path());
   add_output_flags(cmd, o->out);
   cmd->callback([o, &run] { run = [o] { return run_delaunay(*o); }; });
 }

@@ -49,7 +49,7 @@ void add_points_command(CLI::App& app, Runner& run) {
       ->capture_default_str();
   cmd->add_option("-n", opts->n, "Number of points")->check(CLI::Range(std::size_t(1), std::size_t(1) << 28))->capture_default_str();
   cmd->add_option("--seed", opts->seed, "Random seed (same seed, same points)")->capture_default_str();
-  cmd->add_option("-o,--output", opts->output, "Output .xyz file")->required();
+  cmd->add_option("-o,--output", opts->output, "Output .xyz file")->required()->check(non_empty_path());
   add_output_flags(cmd, opts->out);
   cmd->callback([opts, &run] { run = [opts] { return run_points(*opts); }; });
 }

@@ -4,10 +4,13 @@
 #include <iostream>
 #include <new>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "tools/kdmesh/cli.h"
 
 int main(int argc, char** argv) {
+  // Every subcommand: SIGINT, SIGTERM and SIGHUP remove the temporaries of unfinished outputs.
+  kdmesh::remove_temporaries_on_signal();
   CLI::App app{"kdmesh — tetrahedral mesh generator (kd-tree BFS insertion, exact Delaunay)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "kdmesh 0.1.0");

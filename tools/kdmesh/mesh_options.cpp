@@ -153,15 +153,16 @@ void add_mesh_job_options(CLI::App* cmd, MeshCliOptions& o, const MeshCliSpec& s
                   "duplicates (same-orientation copies), orientation (flip facets against their "
                   "shell), all; each change is reported");
   if (spec.outputs) {
-    cmd->add_option("-o,--output", o.output, "Output mesh (.vtu)");
-    cmd->add_option("--summary", o.summary, "Output summary (.json)");
-    cmd->add_option("--nodes", o.nodes, "Output nodes (.xyz)");
-    cmd->add_option("--msh", o.msh, "Output Gmsh mesh (.msh) with physical groups");
-    cmd->add_option("--inp", o.inp, "Output Abaqus/CalculiX input (.inp) with ELSET/NSET/SURFACE groups");
-    cmd->add_option("--medit", o.medit, "Output MEDIT mesh (.mesh) with references");
+    cmd->add_option("-o,--output", o.output, "Output mesh (.vtu)")->check(non_empty_path());
+    cmd->add_option("--summary", o.summary, "Output summary (.json)")->check(non_empty_path());
+    cmd->add_option("--nodes", o.nodes, "Output nodes (.xyz)")->check(non_empty_path());
+    cmd->add_option("--msh", o.msh, "Output Gmsh mesh (.msh) with physical groups")->check(non_empty_path());
+    cmd->add_option("--inp", o.inp, "Output Abaqus/CalculiX input (.inp) with ELSET/NSET/SURFACE groups")->check(non_empty_path());
+    cmd->add_option("--medit", o.medit, "Output MEDIT mesh (.mesh) with references")->check(non_empty_path());
     cmd->add_option("--boundary-vtu", o.boundary_vtu,
                     "Output boundary faces and feature edges (.vtu) with patch/curve ids and a 0/1 "
-                    "cell array per group");
+                    "cell array per group")
+        ->check(non_empty_path());
     cmd->add_option("--element-order", o.element_order,
                     "1: linear tets; 2: quadratic (C3D10), mid-edge nodes on the surface")
         ->check(CLI::IsMember({1, 2}))

@@ -66,9 +66,10 @@ DelaunayVerification verify_delaunay(const PointSet& pts, const Triangulation& t
   std::ostringstream out;
   bool ok = true;
   nlohmann::json j;
-  // Volumes are compared at unit scale (exact power-of-two rescaling; same tets).
-  const UnitScaled scaled(pts);
-  const PointSet& unit = scaled.points();
+  // Volumes are compared with the largest coordinate scaled into [0.5, 1) (a power-of-two
+  // rescaling; same tets), so that neither huge nor mixed huge and tiny inputs overflow.
+  const int vk = magnitude_scale_exponent(pts);
+  const PointSet unit = vk != 0 ? scaled_copy(pts, vk) : pts;
   stage("check: exact validity");
   Stopwatch clock;
   const ValidityReport v = check_delaunay(pts, tri);
@@ -76,8 +77,13 @@ DelaunayVerification verify_delaunay(const PointSet& pts, const Triangulation& t
   out << "check:\n  validity " << (v.ok() ? "ok " : "FAIL ") << " " << v.finite_tets << " tets, "
       << v.hull_faces << " hull faces, adjacency faults " << v.asymmetric_adjacencies
       << ", inverted " << v.bad_orientation << ", non-Delaunay faces " << v.non_delaunay_faces
-      << ", tie faces " << v.tie_faces << ", volume " << std::setprecision(12) << v.volume
-      << " vs hull " << v.hull_volume << std::setprecision(6) << " [" << clock.seconds() << " s]\n";
+      << ", tie faces " << v.tie_faces << ", volume " << std::setprecision(12);
+  if (std::isfinite(v.volume) && std::isfinite(v.hull_volume))
+    out << v.volume << " vs hull " << v.hull_volume;
+  else  // beyond double range in the input's units: say so, with the compared values
+    out << v.scaled_volume << " vs hull " << v.scaled_hull_volume << " (in units of 2^" << -v.volume_exponent
+        << ")";
+  out << std::setprecision(6) << " [" << clock.seconds() << " s]\n";
   for (const std::string& p : v.problems) out << "    " << p << "\n";
   ok = ok && v.ok();
   j["validity"] = {{"pass", v.ok()},

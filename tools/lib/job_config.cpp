@@ -10,14 +10,15 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <sstream>
 #include <utility>
 
 #include "core/error.h"
 #include "core/memory_amount.h"
+#include "io/file_io.h"
 #include "mesher/surface_repair.h"
+#include "tools/lib/job_paths.h"
 
 namespace kdmesh {
 
@@ -58,7 +59,7 @@ const std::vector<std::string> kJobKeys = {"name",        "input", "scale", "siz
                                            "seed",        "check", "max_memory", "repair", "groups",
                                            "patch_groups", "element_order", "msh_version", "improve", "output",
                                            "curvature_angle", "chordal_deviation", "auto_creases", "thickness_layers",
-                                           "tolerance", "max_refinements"};
+                                           "tolerance", "max_refinements", "timeout"};
 const std::vector<std::string> kZoneTypes = {"sharp_edges", "polyline", "segment", "plane",
                                              "point",       "box",      "ball"};
 const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes", "msh", "inp", "mesh", "boundary_vtu"};
@@ -82,9 +83,27 @@ std::vector<std::string> zone_keys(const std::string& type) {
   return {"center", "radius"};  // ball
 }
 
+/// `s` with control bytes (and DEL) shown as \xNN, so that no message echoes raw control
+/// bytes of a hostile file to the terminal.
+std::string printable(const std::string& s) {
+  std::string out;
+  for (const char ch : s) {
+    const unsigned char c = static_cast<unsigned char>(ch);
+    if (c < 0x20 || c == 0x7f) {
+      static const char* hex = "0123456789abcdef";
+      out += "\\x";
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    } else {
+      out += ch;
+    }
+  }
+  return out;
+}
+
 /// The one place that builds an InputError.
 [[noreturn]] void throw_input(const std::string& file, std::uint64_t line, const std::string& msg) {
-  throw InputError(file, line, msg);
+  throw InputError(printable(file), line, printable(msg));
 }
 
 std::uint64_t line_of(const YAML::Node& n) {
@@ -106,8 +125,12 @@ struct Entry {
 
 class Loader {
  public:
-  Loader(std::string file, fs::path base_dir, fs::path out_dir)
-      : file_(std::move(file)), base_(std::move(base_dir)), out_(std::move(out_dir)) {}
+  Loader(std::string file, fs::path base_dir, fs::path out_dir, bool allow_outside, double zone_limit)
+      : file_(std::move(file)),
+        base_(std::move(base_dir)),
+        out_(std::move(out_dir)),
+        allow_outside_(allow_outside),
+        zone_limit_(zone_limit) {}
 
   [[noreturn]] void fail(const YAML::Node& at, const std::string& msg) const {
     throw_input(file_, line_of(at), msg);
@@ -246,9 +269,27 @@ class Loader {
     return out;
   }
 
+  /// An output path: relative to the output directory, and inside it unless allowed.
   std::string resolve_output(const YAML::Node& v, const std::string& what) const {
     const fs::path p = string(v, what);
-    return (p.is_absolute() || out_.empty() ? p : out_ / p).lexically_normal().string();
+    const fs::path full = (p.is_absolute() || out_.empty() ? p : out_ / p).lexically_normal();
+    if (allow_outside_) return full.string();
+    const std::string dir = out_.empty() ? std::string(".") : out_.string();
+    const std::string allow = " (outputs stay inside the output directory '" + dir +
+                              "', --out-dir; --allow-outside-out-dir permits this)";
+    if (p.is_absolute()) fail(v, what + ": '" + p.string() + "' is an absolute path" + allow);
+    const fs::path rel = p.lexically_normal();
+    if (rel.empty() || *rel.begin() == ".." || rel.filename().empty() || rel == ".")
+      fail(v, what + ": '" + p.string() + "' leads outside the output directory" + allow);
+    std::error_code e1, e2;  // a symbolic link inside the directory may still lead out
+    const fs::path cdir = fs::weakly_canonical(dir, e1), cfull = fs::weakly_canonical(full, e2);
+    if (!e1 && !e2) {
+      const fs::path r = cfull.lexically_relative(cdir);
+      if (r.empty() || *r.begin() == "..")
+        fail(v, what + ": '" + p.string() + "' leads outside the output directory through a symbolic link" +
+                    allow);
+    }
+    return full.string();
   }
 
   /// One entry of `groups`: {name, dim?, exactly one of zone / point / box {min, max}}.
@@ -387,6 +428,9 @@ class Loader {
     if (e.count("zones")) {
       const YAML::Node z = e.at("zones").value;
       if (!z.IsSequence()) fail(z, key("zones") + ": expected a list, got " + describe(z));
+      if (zone_limit_ > 0 && double(z.size()) > zone_limit_)
+        fail(z, key("zones") + ": " + std::to_string(z.size()) + " zones need more than the memory limit (at most " +
+                    std::to_string(std::uint64_t(zone_limit_)) + " zones; --max-memory)");
       for (std::size_t i = 0; i < z.size(); ++i)
         job.sizing.zones.push_back(zone(z[i], where + ": zones[" + std::to_string(i) + "]"));
     }
@@ -426,6 +470,7 @@ class Loader {
     if (e.count("patch_groups"))
       job.group_options.patch_groups = job.group_options.curve_groups =
           boolean(e.at("patch_groups").value, key("patch_groups"));
+    if (e.count("timeout")) job.timeout = positive(e.at("timeout").value, key("timeout"));
     if (e.count("improve")) job.improve = boolean(e.at("improve").value, key("improve"));
     if (e.count("element_order")) {
       const YAML::Node v = e.at("element_order").value;
@@ -524,37 +569,80 @@ class Loader {
       }
       config.jobs.push_back(std::move(j));
     }
+    check_batch_paths(config, jobs);
     return config;
+  }
+
+  /// Every input and output of the batch as one run: no output is any job's input, and no two
+  /// outputs are one file, compared by device and inode (hard links, symbolic links, "a/../b").
+  void check_batch_paths(const BatchConfig& config, const YAML::Node& jobs) const {
+    std::vector<PathUse> uses;
+    std::vector<std::size_t> owner;
+    for (std::size_t i = 0; i < config.jobs.size(); ++i)
+      for (PathUse& u : job_path_uses(config.jobs[i])) {
+        u.label = "job '" + config.jobs[i].name + "' " + u.label;
+        uses.push_back(std::move(u));
+        owner.push_back(i);
+      }
+    const auto clash = find_path_clash(uses);
+    if (!clash) return;
+    const YAML::Node at = jobs[owner[clash->second]];
+    const PathUse& later = uses[clash->second];
+    fail(at["output"] && later.output ? at["output"] : at["input"] && !later.output ? at["input"] : at,
+         describe_path_clash(uses, *clash) +
+             (uses[clash->first].output == later.output ? "" : " (the result would depend on the order of the jobs)"));
   }
 
  private:
   std::string file_;
   fs::path base_, out_;
+  bool allow_outside_ = false;
+  double zone_limit_ = 0;  ///< most zones a job may have (0: no limit)
 };
 
 }  // namespace
 
-BatchConfig load_batch_config(const std::string& path, const std::string& out_dir) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw_input(path, 0, "cannot open batch file");
-  std::stringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw_input(path, 0, "cannot read batch file");
-  YAML::Node root;
+BatchConfig load_batch_config(const std::string& path, const BatchLoadOptions& options) {
+  const double limit = effective_memory_limit(options.max_memory);
+  std::string text;
   try {
-    root = YAML::Load(text.str());
+    const double max_bytes = limit > 0 ? limit / kConfigBytesPerByte : 0;
+    text = read_whole_file(path, max_bytes > 0 ? std::uint64_t(std::max(1.0, max_bytes)) : 0);
+  } catch (const InputError& e) {
+    const std::string why = std::string(e.what()).substr(path.size() + 2);
+    throw_input(path, 0, why + (limit > 0 && why.find("too large") != std::string::npos
+                                    ? " (parsing a batch file takes up to " + std::to_string(int(kConfigBytesPerByte)) +
+                                          " bytes of memory per byte; --max-memory)"
+                                    : std::string()));
+  }
+  std::vector<YAML::Node> docs;
+  try {
+    docs = YAML::LoadAll(text);
   } catch (const YAML::Exception& e) {
     throw_input(path, e.mark.line >= 0 ? std::uint64_t(e.mark.line) + 1 : 0,
                      "YAML syntax error" +
                          (e.mark.column >= 0 ? " at column " + std::to_string(e.mark.column + 1) : std::string()) +
                          ": " + e.msg);
   }
+  for (std::size_t d = 1; d < docs.size(); ++d)
+    if (docs[d].IsDefined() && !docs[d].IsNull())
+      throw_input(path, line_of(docs[d]),
+                  "a second YAML document (after '---'): a batch file is one document; put every job in its "
+                  "'jobs' list");
+  const YAML::Node root = docs.empty() ? YAML::Node() : docs.front();
   const fs::path base = fs::path(path).parent_path();
+  const fs::path out = options.out_dir.empty() ? base : fs::path(options.out_dir);
   try {
-    return Loader(path, base, out_dir).load(root);
+    return Loader(path, base, out, options.allow_outside_out_dir, limit > 0 ? limit / kBytesPerZone : 0).load(root);
   } catch (const YAML::Exception& e) {  // not expected: every access is checked first
     throw_input(path, e.mark.line >= 0 ? std::uint64_t(e.mark.line) + 1 : 0, e.msg);
   }
+}
+
+BatchConfig load_batch_config(const std::string& path, const std::string& out_dir) {
+  BatchLoadOptions o;
+  o.out_dir = out_dir;
+  return load_batch_config(path, o);
 }
 
 }  // namespace kdmesh

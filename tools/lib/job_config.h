@@ -54,11 +54,13 @@ namespace kdmesh {
 ///                     exactly one of zone: <sizing zone name> | point: [x,y,z] (the nearest
 ///                     patch / curve) | box: {min: [..], max: [..]} (everything inside)}
 ///     patch_groups optional bool: also a group per surface patch and feature curve (default false)
+///     timeout      optional seconds > 0: the job is stopped and fails (exit 7) past it
 ///     improve      optional bool: quality improvement after meshing (default true)
 ///     element_order optional 1 or 2 (C3D10 / tet10 with mid-edge nodes on the surface)
 ///     msh_version  optional 4.1 (default) or 2.2
 ///     output       optional mapping {vtu, summary, nodes, msh, inp, mesh, boundary_vtu}: paths
-///                  relative to out_dir; no two outputs (of any jobs) may be one file. mesh is
+///                  relative to out_dir, inside it (BatchLoadOptions); no two outputs (of any
+///                  jobs) may be one file, and no output may be any job's input. mesh is
 ///                  MEDIT; boundary_vtu the boundary faces and feature edges with their patch /
 ///                  curve ids and one 0/1 cell array per group (io/boundary_vtu_writer.h)
 ///
@@ -70,8 +72,32 @@ struct BatchConfig {
   std::vector<MeshJob> jobs;  ///< in file order; MeshJob::origin is "file:line" of the job
 };
 
-/// Loads and validates a batch file. Relative output paths are resolved against `out_dir`
-/// ("" = the current directory); inputs against the YAML file's directory.
+/// How a batch file is loaded.
+struct BatchLoadOptions {
+  /// Where outputs go: relative output paths are resolved against it; "" = the YAML file's
+  /// directory.
+  std::string out_dir;
+  /// Accept outputs outside out_dir (absolute paths, '..', symbolic links leading out). Off: such
+  /// an output is an InputError naming file:line and the key.
+  bool allow_outside_out_dir = false;
+  /// The memory limit (bytes; as MeshJob::max_memory: 0 = the machine's memory, < 0 = none). It
+  /// bounds the batch file's size (kConfigBytesPerByte bytes of memory per byte of YAML) and each
+  /// job's zone count (kBytesPerZone each), before the YAML is parsed.
+  double max_memory = 0;
+};
+
+/// Memory yaml-cpp takes per byte of a batch file (measured: a 48 MB file of 1M zones took
+/// 4.9 GB, ~100 bytes per byte), and the memory one sizing zone costs at most (its YAML nodes
+/// and its share of the sizing field's search structures).
+constexpr double kConfigBytesPerByte = 128, kBytesPerZone = 4096;
+
+/// Loads and validates a batch file. Relative output paths are resolved against the output
+/// directory (options.out_dir; default the YAML file's directory) and must stay inside it;
+/// inputs are resolved against the YAML file's directory. The batch's paths are checked as one
+/// run: no output is any job's input, and no two outputs are one file (by device and inode).
+/// The file must be a regular file of one YAML document.
+BatchConfig load_batch_config(const std::string& path, const BatchLoadOptions& options);
+/// The same, with `out_dir` as options.out_dir and the other options' defaults.
 BatchConfig load_batch_config(const std::string& path, const std::string& out_dir = "");
 
 /// Levenshtein distance, and the candidate closest to `word` (for "did you mean" hints; ""

@@ -3,10 +3,12 @@
 #include "tools/lib/job_process.h"
 
 #include <poll.h>
+#include <sys/prctl.h>
 #include <sys/types.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <csignal>
@@ -47,10 +49,14 @@ void write_all(int fd, const std::string& s) {
 }
 
 /// The child: run the job, send "<exit code>\n<summary json>" and exit with the job's code.
-[[noreturn]] void child_main(const MeshJob& job, const MeshJobCallbacks& cb, int fd) {
+[[noreturn]] void child_main(const MeshJob& job, const MeshJobCallbacks& cb, int fd, pid_t parent) {
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
+  std::signal(SIGHUP, SIG_DFL);
   remove_temporaries_on_signal();
+  // If the parent dies (even of SIGKILL), SIGTERM: remove the temporaries and stop.
+  ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+  if (::getppid() != parent) std::raise(SIGTERM);  // it died before prctl took effect
   MeshJobCallbacks callbacks = cb;
   if (const char* c = std::getenv("KDMESH_INJECT_CRASH")) {  // "<job>" or "<job>@<log prefix>"
     const std::string spec = c;
@@ -113,6 +119,18 @@ bool parse_result(const std::string& text, MeshJobResult& r) {
   }
 }
 
+/// The result of a child stopped because it ran over its time limit.
+MeshJobResult timed_out_child(const MeshJob& job, double seconds) {
+  MeshJobResult r;
+  r.code = ExitCode::resource;
+  r.summary = {{"job", job.name}, {"input", job.input}, {"status", "failed"},
+               {"seconds", {{"total", seconds}}},
+               {"error", {{"type", error_type_name(ExitCode::resource)}, {"exit_code", int(ExitCode::resource)},
+                          {"message", "job '" + job.name + "' ran over its time limit of " + std::to_string(job.timeout) +
+                                          " s (timeout / --timeout) and was stopped; no output was written"}}}};
+  return r;
+}
+
 struct Running {
   std::size_t job;
   pid_t pid;
@@ -120,7 +138,11 @@ struct Running {
   std::string text;
   int slot;
   Stopwatch clock;
+  int stop_signals = 0;  ///< signals sent for the time limit: SIGTERM, then SIGKILL
 };
+
+/// Grace after SIGTERM before SIGKILL, for a job over its time limit (seconds).
+constexpr double kKillGrace = 5;
 
 }  // namespace
 
@@ -133,6 +155,8 @@ std::vector<MeshJobResult> run_jobs_in_processes(
   if (workers > unsigned(kMaxChildren)) workers = kMaxChildren;
   auto old_int = std::signal(SIGINT, forward_to_children_and_die);
   auto old_term = std::signal(SIGTERM, forward_to_children_and_die);
+  auto old_hup = std::signal(SIGHUP, forward_to_children_and_die);
+  const pid_t self = ::getpid();
   std::cout.flush();
   std::cerr.flush();
 
@@ -153,7 +177,7 @@ std::vector<MeshJobResult> run_jobs_in_processes(
       if (pid == 0) {
         ::close(fds[0]);
         for (const Running& r : running) ::close(r.fd);
-        child_main(jobs[i], cb, fds[1]);
+        child_main(jobs[i], cb, fds[1], self);
       }
       ::close(fds[1]);
       int slot = 0;
@@ -161,9 +185,24 @@ std::vector<MeshJobResult> run_jobs_in_processes(
       g_children[slot].store(pid);
       running.push_back({i, pid, fds[0], {}, slot, Stopwatch()});
     }
+    // Time limits: SIGTERM at the limit (the child removes its temporaries), SIGKILL after a
+    // grace; the poll wakes up for the next deadline.
+    double wait = -1;
+    for (Running& r : running) {
+      const double limit = jobs[r.job].timeout;
+      if (!(limit > 0)) continue;
+      double left = limit + kKillGrace * r.stop_signals - r.clock.seconds();
+      while (left <= 0 && r.stop_signals < 2) {
+        ::kill(r.pid, r.stop_signals == 0 ? SIGTERM : SIGKILL);
+        ++r.stop_signals;
+        left = limit + kKillGrace * r.stop_signals - r.clock.seconds();
+      }
+      if (r.stop_signals < 2) wait = wait < 0 ? left : std::min(wait, left);
+    }
     std::vector<pollfd> polls;
     for (const Running& r : running) polls.push_back({r.fd, POLLIN, 0});
-    if (::poll(polls.data(), polls.size(), -1) < 0) {
+    const int wait_ms = wait < 0 ? -1 : int(std::min(wait * 1000 + 1, 1e9));
+    if (::poll(polls.data(), polls.size(), wait_ms) < 0) {
       if (errno == EINTR) continue;
       throw Error(std::string("poll failed: ") + std::strerror(errno));
     }
@@ -186,7 +225,10 @@ std::vector<MeshJobResult> run_jobs_in_processes(
       const MeshJob& job = jobs[r.job];
       MeshJobResult& result = results[r.job];
       const bool clean_exit = WIFEXITED(status);
-      if (!clean_exit || !parse_result(r.text, result)) {
+      if (r.stop_signals > 0 && !(clean_exit && parse_result(r.text, result) && result.ok())) {
+        result = timed_out_child(job, r.clock.seconds());
+        for (const std::string& path : output_paths(job)) remove_temporaries_of(path, long(r.pid));
+      } else if (!clean_exit || !parse_result(r.text, result)) {
         result = lost_child(job, status, r.clock.seconds());
         for (const std::string& path : output_paths(job)) remove_temporaries_of(path, long(r.pid));
       }
@@ -196,6 +238,7 @@ std::vector<MeshJobResult> run_jobs_in_processes(
   }
   std::signal(SIGINT, old_int);
   std::signal(SIGTERM, old_term);
+  std::signal(SIGHUP, old_hup);
   return results;
 }
 

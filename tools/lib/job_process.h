@@ -20,6 +20,11 @@ namespace kdmesh {
 /// forwarded to the running children (which remove their temporaries) before this process
 /// dies of the signal.
 ///
+/// Time limits: a job with MeshJob::timeout > 0 still running after that many seconds gets
+/// SIGTERM (it removes its temporaries), SIGKILL 5 s later if need be, and fails with
+/// ExitCode::resource and a message naming the limit; the other jobs go on.
+/// If this process dies, even of SIGKILL, its children get SIGTERM (PR_SET_PDEATHSIG).
+///
 /// `callbacks(i)` makes the callbacks of job i (called in the child); `done(i, result)` is
 /// called in this process as each job finishes, in completion order.
 /// Fault injection for tests: KDMESH_INJECT_CRASH=<job> makes that job's child kill itself

@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <array>
+#include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <sstream>
 #include <memory>
@@ -17,6 +17,7 @@
 #include "core/atomic_file.h"
 #include "core/timer.h"
 #include "io/boundary_vtu_writer.h"
+#include "io/file_io.h"
 #include "io/inp_writer.h"
 #include "io/medit_writer.h"
 #include "io/msh_writer.h"
@@ -40,6 +41,8 @@
 #include "mesher/volume_mesh.h"
 #include "sizing/features.h"
 #include "tools/lib/delaunay_verify.h"
+#include "tools/lib/job_paths.h"
+#include "tools/lib/numeric_ranges.h"
 
 namespace kdmesh {
 
@@ -212,12 +215,12 @@ DelaunayVerification check_nodes_delaunay(const MeshJob& job, const PointSet& pt
   return verify_delaunay(pts, r.tri, tets, o);
 }
 
-/// Writes `text` to `path` (no atomicity here: the caller passes a temporary path).
+/// Writes `text` to `path` (no atomicity here: the caller passes a temporary path); errors
+/// name `target`, the path the user asked for.
 void write_text(const std::string& path, const std::string& text, const std::string& target) {
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  f << text;
+  FileWriter f(path, target);
+  f.write(text.data(), text.size());
   f.close();
-  if (!f) throw OutputError(target, "cannot write");
 }
 
 void make_parent_dirs(const std::string& path) {
@@ -258,7 +261,10 @@ void check_memory_estimate(const MeshJob& job, const PreparedSurface& surface, c
   const double cap = limit > 0 ? std::max(1e6, 2 * limit / kBytesPerNode) : 2e9;
   const ResourceEstimate e = estimate_resources(surface, query, sizing, cap);
   j["seconds"]["estimate"] = clock.seconds();
-  const std::string nodes = (e.capped ? "more than " : "~") + std::to_string(std::llround(e.nodes));
+  char count[32];  // whole numbers while exact; beyond 2^53 (or non-finite) in scientific form
+  if (e.nodes < 9e15) std::snprintf(count, sizeof count, "%.0f", e.nodes);
+  else std::snprintf(count, sizeof count, "%.3g", e.nodes);
+  const std::string nodes = (e.capped ? "more than " : "~") + std::string(count);
   const std::string limit_text = limit > 0 ? format_bytes(limit) : std::string("none");
   j["estimate"] = {{"nodes", e.nodes}, {"surface_nodes", e.surface_nodes}, {"interior_nodes", e.interior_nodes},
                    {"peak_bytes", e.peak_bytes}, {"capped", e.capped}, {"limit_bytes", limit}};
@@ -475,6 +481,8 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
   };
   if (!(job.scale > 0)) throw UsageError("job '" + job.name + "': scale must be > 0");
   if (!(job.sizing.max_size > 0)) throw UsageError("job '" + job.name + "': size must be > 0");
+  check_option_ranges(job);  // before any work: numbers in the range the pipeline computes in
+  check_job_paths(job);      // outputs may be written, none is an input or shared
   Stopwatch total, clock;
   nlohmann::json& sec = j["seconds"];
   nlohmann::json& counts = j["counts"];
@@ -483,6 +491,7 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
   log("reading " + job.input);
   SurfaceMesh raw = read_surface(job.input);
   sec["read"] = clock.seconds();
+  check_model_ranges(job, raw);  // coordinates after scaling, sizes against the model
 
   clock.reset();
   log("preparing the surface (" + std::to_string(raw.points.size()) + " points, " +
@@ -634,55 +643,45 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
     sec["groups"] = clock.seconds();
   }
 
-  // Outputs: every file to a temporary first; all renamed into place only once all are written.
+  // Outputs: every file to a temporary first; all renamed into place (all or nothing) only once
+  // all are written. Errors name the user's path, not the temporary one.
   clock.reset();
-  std::vector<std::unique_ptr<AtomicFile>> files;
+  AtomicFileSet files;
   nlohmann::json outputs = nlohmann::json::object();
-  auto open = [&](const std::string& path, const char* key) -> const std::string& {
+  auto output = [&](const std::string& path, const char* key, const auto& write) {
+    if (path.empty()) return;
+    log("writing " + path);
     make_parent_dirs(path);
-    files.push_back(std::make_unique<AtomicFile>(path));
+    const std::string temp = files.add(path);
     outputs[key] = path;
-    return files.back()->temp_path();
+    try {
+      write(temp);
+    } catch (const OutputError& e) {
+      if (e.file() != temp) throw;
+      throw OutputError(path, e.reason());
+    }
   };
-  if (!job.vtu.empty()) {
-    log("writing " + job.vtu);
-    write_vtu(tm, open(job.vtu, "vtu"));
-  }
-  if (!job.nodes.empty()) {
-    log("writing " + job.nodes);
-    write_xyz(mesh.nodes.points, open(job.nodes, "nodes"));
-  }
-  if (!job.msh.empty()) {
-    log("writing " + job.msh);
+  output(job.vtu, "vtu", [&](const std::string& t) { write_vtu(tm, t); });
+  output(job.nodes, "nodes", [&](const std::string& t) { write_xyz(mesh.nodes.points, t); });
+  output(job.msh, "msh", [&](const std::string& t) {
     MshOptions mo;
     mo.version = job.msh_version;
-    write_msh(fe, open(job.msh, "msh"), mo);
-  }
-  if (!job.inp.empty()) {
-    log("writing " + job.inp);
+    write_msh(fe, t, mo);
+  });
+  output(job.inp, "inp", [&](const std::string& t) {
     InpOptions io;
     io.heading = "kdmesh job " + job.name + " (" + job.input + ")";
-    write_inp(fe, open(job.inp, "inp"), io);
-  }
-  if (!job.medit.empty()) {
-    log("writing " + job.medit);
-    write_medit(fe, open(job.medit, "medit"));
-  }
-  if (!job.boundary_vtu.empty()) {
-    log("writing " + job.boundary_vtu);
-    write_boundary_vtu(fe, open(job.boundary_vtu, "boundary_vtu"));
-  }
-  std::string summary_tmp;
-  if (!job.summary.empty()) summary_tmp = open(job.summary, "summary");
+    write_inp(fe, t, io);
+  });
+  output(job.medit, "medit", [&](const std::string& t) { write_medit(fe, t); });
+  output(job.boundary_vtu, "boundary_vtu", [&](const std::string& t) { write_boundary_vtu(fe, t); });
+  if (!job.summary.empty()) outputs["summary"] = job.summary;
   j["outputs"] = outputs;
   j["status"] = "ok";
   sec["write"] = clock.seconds();
   sec["total"] = total.seconds();
-  if (!job.summary.empty()) {
-    log("writing " + job.summary);
-    write_text(summary_tmp, j.dump(2) + "\n", job.summary);
-  }
-  for (auto& f : files) f->commit();
+  output(job.summary, "summary", [&](const std::string& t) { write_text(t, j.dump(2) + "\n", job.summary); });
+  files.commit();
 }
 
 }  // namespace

@@ -34,6 +34,8 @@ struct MeshJob {
   /// Memory limit in bytes: the job is refused (ResourceError, exit 7) before node placement
   /// when its estimated peak memory exceeds it. 0 = the machine's physical memory; < 0 = none.
   double max_memory = 0;
+  /// Wall-clock limit in seconds when run in a batch (tools/lib/job_process.h); 0 = none.
+  double timeout = 0;
   SurfaceRepairOptions repair; ///< opt-in safe surface repairs, reported as notices
   /// Automatic sizing terms, on by default; each is announced by a notice when it shrinks the
   /// size below what the job asks (never below sizing.min_size):

@@ -15,6 +15,7 @@
 
 #include <malloc.h>
 #include <poll.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/types.h>
 #include <sys/wait.h>
@@ -468,6 +469,7 @@ TetgenRun run_tetgen(const PreparedSurface& surface, const PointSet& holes, cons
     throw Error(std::string("cannot start the TetGen process: ") + std::strerror(errno));
   }
   if (pid == 0) {
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlive kdmesh (it holds no temporaries)
     ::close(data[0]);
     ::close(logp[0]);
     tetgen_child(surface, holes, background, switches, data[1], logp[1]);

@@ -1,0 +1,169 @@
+// Issue 19, class 4 — smaller defects: non-convex PLY polygons, UTF-8 BOMs, true repair hints,
+// batch directories, output errors naming the user's path with errno text, control bytes in
+// config errors, empty and long output names, second YAML documents.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "core/surface_mesh.h"
+#include "io/surface_io.h"
+#include "tests/support/run_cli.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using kdmesh::test::CliResult;
+using kdmesh::test::slurp;
+
+fs::path tmpdir() { return kdmesh::test::process_tmpdir("cli_small_defects"); }
+
+CliResult kdmesh(const std::string& args, const std::string& env = "") {
+  return kdmesh::test::run_kdmesh(args, tmpdir(), env);
+}
+
+bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+fs::path fresh(const std::string& name) {
+  const fs::path d = tmpdir() / name;
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+/// The box [x0, x0 + e] x [0, e]^2 as 12 outward triangles (every face split on one diagonal).
+void add_cube(kdmesh::SurfaceMesh& m, double x0, double e) {
+  const std::uint32_t base = std::uint32_t(m.points.size());
+  for (int i = 0; i < 8; ++i) m.points.push_back(x0 + e * (i & 1), e * ((i >> 1) & 1), e * ((i >> 2) & 1));
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads)
+    for (const int t : {q[0], q[1], q[2], q[0], q[2], q[3]}) m.tris.push_back(base + std::uint32_t(t));
+}
+
+// An L-shaped prism whose hexagonal caps start at a vertex that does not see the whole
+// polygon: a fan from it leaves the polygon. Ear clipping meshes it (volume 3).
+TEST(SmallDefects, NonConvexPlyPolygonsAreTriangulatedInTheirPlane) {
+  const fs::path d = fresh("ply");
+  const double xy[6][2] = {{2, 1}, {1, 1}, {1, 2}, {0, 2}, {0, 0}, {2, 0}};  // counter-clockwise
+  std::ostringstream ply;
+  ply << "ply\nformat ascii 1.0\nelement vertex 12\nproperty float x\nproperty float y\nproperty float z\n"
+         "element face 8\nproperty list uchar int vertex_indices\nend_header\n";
+  for (int z = 0; z < 2; ++z)
+    for (const auto& p : xy) ply << p[0] << " " << p[1] << " " << z << "\n";
+  ply << "6 5 4 3 2 1 0\n";    // bottom, facing -z
+  ply << "6 6 7 8 9 10 11\n";  // top, facing +z
+  for (int i = 0; i < 6; ++i) {
+    const int j = (i + 1) % 6;
+    ply << "4 " << i << " " << j << " " << 6 + j << " " << 6 + i << "\n";
+  }
+  std::ofstream(d / "l.ply") << ply.str();
+  const CliResult r = kdmesh("mesh " + (d / "l.ply").string() + " --size 0.5 --json -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(j["mesh_check"]["mesh_volume"].get<double>(), 3.0, 1e-9);
+}
+
+TEST(SmallDefects, AsciiStlWithUtf8BomIsRead) {
+  const fs::path d = fresh("bom");
+  kdmesh::SurfaceMesh m;
+  add_cube(m, 0, 2);
+  kdmesh::write_stl(m, (d / "plain.stl").string(), false);
+  std::ofstream(d / "bom.stl", std::ios::binary) << "\xEF\xBB\xBF" << slurp(d / "plain.stl");
+  const CliResult r = kdmesh("mesh " + (d / "bom.stl").string() + " --size 1 -q");
+  EXPECT_EQ(r.code, 0) << r.err;
+}
+
+// Two cubes touching along a face share its facets, facing opposite ways: the duplicates
+// repair cannot fix that, so the refusal must not say it does.
+TEST(SmallDefects, TouchingCubesGetNoFalseRepairHint) {
+  const fs::path d = fresh("touching");
+  kdmesh::SurfaceMesh m;
+  add_cube(m, 0, 1);
+  add_cube(m, 1, 1);
+  kdmesh::write_stl(m, (d / "two.stl").string());
+  const CliResult r = kdmesh("mesh " + (d / "two.stl").string() + " --size 0.5 -q");
+  EXPECT_EQ(r.code, 4) << r.err;
+  EXPECT_TRUE(contains(r.err, "duplicated facets")) << r.err;
+  EXPECT_FALSE(contains(r.err, "--repair duplicates")) << r.err;
+  EXPECT_TRUE(contains(r.err, "no repair applies")) << r.err;
+}
+
+TEST(SmallDefects, BatchOfADirectorySaysSo) {
+  const fs::path d = fresh("dir");
+  const CliResult r = kdmesh("batch " + d.string() + " -q");
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_TRUE(contains(r.err, "is a directory")) << r.err;
+  EXPECT_FALSE(contains(r.err, "empty batch file")) << r.err;
+}
+
+// A write that fails (here: the file size limit) names the path the user gave, with errno text.
+TEST(SmallDefects, OutputErrorsNameTheUsersPathAndErrno) {
+  const fs::path d = fresh("errno");
+  kdmesh::SurfaceMesh m;
+  add_cube(m, 0, 4);
+  kdmesh::write_stl(m, (d / "c.stl").string());
+  const std::string limit = "ulimit -f 2; trap '' XFSZ;";
+  const CliResult v = kdmesh("mesh " + (d / "c.stl").string() + " --size 0.5 -q -o " + (d / "out.vtu").string(), limit);
+  EXPECT_EQ(v.code, 6) << v.err;
+  EXPECT_TRUE(contains(v.err, (d / "out.vtu").string() + ": write failed: File too large")) << v.err;
+  EXPECT_FALSE(contains(v.err, ".tmp-")) << v.err;
+  const CliResult s = kdmesh("mesh " + (d / "c.stl").string() + " --size 2 -q --summary " + (d / "s.json").string(), limit);
+  EXPECT_EQ(s.code, 6) << s.err;
+  EXPECT_TRUE(contains(s.err, (d / "s.json").string() + ": write failed: File too large")) << s.err;
+  EXPECT_FALSE(fs::exists(d / "out.vtu"));
+  EXPECT_FALSE(fs::exists(d / "s.json"));
+}
+
+TEST(SmallDefects, ConfigErrorsDoNotEchoControlBytes) {
+  const fs::path d = fresh("control");
+  std::ofstream(d / "c.stl") << "solid x\nendsolid x\n";
+  std::ofstream(d / "jobs.yaml") << "jobs:\n  - name: a\n    input: c.stl\n    size: 1\n    \"ke\x1b[2Jy\x07\": 1\n";
+  const CliResult r = kdmesh("batch " + (d / "jobs.yaml").string() + " -q");
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_TRUE(contains(r.err, "unknown key")) << r.err;
+  EXPECT_FALSE(contains(r.err, "\x1b")) << r.err;
+  EXPECT_FALSE(contains(r.err, "\x07")) << r.err;
+  EXPECT_TRUE(contains(r.err, "\\x1b")) << r.err;
+}
+
+TEST(SmallDefects, EmptyOutputPathIsAUsageError) {
+  const fs::path d = fresh("empty");
+  kdmesh::SurfaceMesh m;
+  add_cube(m, 0, 2);
+  kdmesh::write_stl(m, (d / "c.stl").string());
+  EXPECT_EQ(kdmesh("mesh " + (d / "c.stl").string() + " --size 1 -q -o ''").code, 2);
+  EXPECT_EQ(kdmesh("mesh " + (d / "c.stl").string() + " --size 1 -q --summary ''").code, 2);
+  std::ofstream(d / "p.xyz") << "0 0 0\n1 0 0\n0 1 0\n0 0 1\n";
+  EXPECT_EQ(kdmesh("delaunay " + (d / "p.xyz").string() + " -q -o ''").code, 2);
+}
+
+// A 251-character output name (the file-name limit is 255) is written: the temporary's
+// suffix must not push it over the limit.
+TEST(SmallDefects, LongOutputNameIsWritten) {
+  const fs::path d = fresh("long");
+  kdmesh::SurfaceMesh m;
+  add_cube(m, 0, 2);
+  kdmesh::write_stl(m, (d / "c.stl").string());
+  const std::string name = std::string(247, 'n') + ".vtu";
+  ASSERT_EQ(name.size(), 251u);
+  const CliResult r = kdmesh("mesh " + (d / "c.stl").string() + " --size 1 -q -o " + (d / name).string() +
+                             " --summary " + (d / (std::string(246, 's') + ".json")).string());
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(d / name));
+}
+
+TEST(SmallDefects, SecondYamlDocumentIsRefused) {
+  const fs::path d = fresh("docs");
+  std::ofstream(d / "c.stl") << "solid x\nendsolid x\n";
+  std::ofstream(d / "jobs.yaml") << "jobs:\n  - {name: a, input: c.stl, size: 1}\n---\njobs:\n  - {name: b, input: c.stl, size: 1}\n";
+  const CliResult r = kdmesh("batch " + (d / "jobs.yaml").string() + " -q");
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_TRUE(contains(r.err, (d / "jobs.yaml").string() + ":4:")) << r.err;
+  EXPECT_TRUE(contains(r.err, "second YAML document")) << r.err;
+}
+
+}  // namespace

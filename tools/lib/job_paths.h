@@ -1,0 +1,25 @@
+// kdmesh — the files a meshing job reads and writes, checked before any work is done.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/path_clash.h"
+#include "tools/lib/mesh_job.h"
+
+namespace kdmesh {
+
+/// The job's input and every output it writes, labelled "input", "vtu output", ... .
+std::vector<PathUse> job_path_uses(const MeshJob& job);
+
+/// Checks a job's paths before any work: each output may be created as, or replace, a regular
+/// file (check_output_target; OutputError, exit 6), and no output is the job's input or another
+/// of its outputs, compared by device and inode (UsageError, exit 2).
+void check_job_paths(const MeshJob& job);
+
+/// The same for a run with one input and outputs given by option (label: the option name);
+/// empty outputs are not written and skipped.
+void check_run_paths(const std::string& input, const std::vector<std::pair<std::string, std::string>>& outputs);
+
+}  // namespace kdmesh

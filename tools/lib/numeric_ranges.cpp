@@ -1,0 +1,95 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "tools/lib/numeric_ranges.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include "core/error.h"
+
+namespace kdmesh {
+
+namespace {
+
+std::string num(double x) {
+  std::ostringstream s;
+  s.precision(6);
+  s << x;
+  return s.str();
+}
+
+}  // namespace
+
+void check_option_ranges(const MeshJob& job) {
+  const std::string who = "job '" + job.name + "': ";
+  auto positive_finite = [&](double v, const char* what) {
+    if (!(std::isfinite(v) && v > 0)) throw UsageError(who + what + " " + num(v) + " must be finite and > 0");
+  };
+  positive_finite(job.scale, "scale (--scale)");
+  positive_finite(job.sizing.max_size, "size (--size)");
+  if (job.sizing.min_size != 0) positive_finite(job.sizing.min_size, "min_size (--min-size)");
+  positive_finite(job.sizing.gradation, "gradation (--gradation)");
+  if (job.sizing.gradation > kMaxGradation)
+    throw UsageError(who + "gradation (--gradation) " + num(job.sizing.gradation) + " is above " +
+                     num(kMaxGradation) + ": neighbouring elements would differ in size by more than " +
+                     num(1 + kMaxGradation) + "x, which no mesh honours (and the surface sampling's work grows " +
+                     "as its square)");
+  if (!(std::isfinite(job.sharp_angle) && job.sharp_angle >= 0 && job.sharp_angle < 180))
+    throw UsageError(who + "sharp_angle (--sharp-angle) " + num(job.sharp_angle) + " must be in [0, 180)");
+  for (std::size_t i = 0; i < job.sizing.zones.size(); ++i) {
+    const SizingZone& z = job.sizing.zones[i];
+    const std::string w = who + "zones[" + std::to_string(i) + "]" + (z.name.empty() ? "" : " (" + z.name + ")") + ": ";
+    if (!(std::isfinite(z.size) && z.size > 0)) throw UsageError(w + "size " + num(z.size) + " must be finite and > 0");
+    for (double c : z.coords)
+      if (!(std::isfinite(c) && std::fabs(c) <= kMaxCoordinate))
+        throw UsageError(w + "coordinate " + num(c) + " is outside [-" + num(kMaxCoordinate) + ", " +
+                         num(kMaxCoordinate) + "], where distances to it stay finite");
+  }
+}
+
+void check_model_ranges(const MeshJob& job, const SurfaceMesh& raw) {
+  if (raw.points.size() == 0) return;  // prepare_surface reports empty models
+  double lo[3], hi[3], magnitude = 0;
+  for (int k = 0; k < 3; ++k) lo[k] = hi[k] = raw.points.p(0)[k];
+  for (std::size_t i = 0; i < raw.points.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      const double v = raw.points.p(i)[k];
+      lo[k] = std::min(lo[k], v);
+      hi[k] = std::max(hi[k], v);
+      magnitude = std::max(magnitude, std::fabs(v));
+    }
+  // In the scaled units (an overflow to inf is caught by the first check).
+  const double s = job.scale;
+  const double m = magnitude * s;
+  const double d0 = hi[0] - lo[0], d1 = hi[1] - lo[1], d2 = hi[2] - lo[2];
+  const double big = std::max({d0, d1, d2});
+  const double extent = big > 0 ? big * std::sqrt((d0 / big) * (d0 / big) + (d1 / big) * (d1 / big) +
+                                                  (d2 / big) * (d2 / big)) * s
+                                 : 0;
+  const std::string scaled = s != 1 ? " after scaling by " + num(s) : std::string();
+  if (!(std::isfinite(m) && m <= kMaxCoordinate))
+    throw InputError(job.input, 0,
+                     "coordinates up to " + num(magnitude) + scaled + " (" + num(m) + ") exceed " + num(kMaxCoordinate) +
+                         ", the largest magnitude the mesher computes with exactly and finitely; scale the model down (--scale)");
+  if (big > 0 && !(extent >= kMinExtent))
+    throw InputError(job.input, 0,
+                     "the model's extent (bounding-box diagonal) is " + num(extent) + scaled + ", below " +
+                         num(kMinExtent) + ", the smallest the mesher computes with exactly and finitely; scale the model up (--scale)");
+  const double size = job.sizing.max_size;
+  if (size > kMaxSizePerExtent * extent && extent > 0)
+    throw UsageError("job '" + job.name + "': size (--size) " + num(size) + " is more than " + num(kMaxSizePerExtent) +
+                     " times the model's extent " + num(extent) + scaled + "; a size of " + num(extent) +
+                     " already gives the coarsest mesh");
+  const double min_size = job.sizing.min_size > 0 ? job.sizing.min_size : size / 1000;
+  const bool given = job.sizing.min_size > 0 && job.sizing.min_size != size / 1000;  // not the default
+  const double floor = kMinSizePerMagnitude * std::max(m, extent);
+  if (min_size < floor)
+    throw UsageError("job '" + job.name + "': " +
+                     (given ? "min_size (--min-size) " + num(min_size)
+                                              : "size (--size) " + num(size) + " (min_size = size / 1000 = " + num(min_size) + ")") +
+                     " is below " + num(floor) + " = 2^-40 times the model's coordinates" + scaled +
+                     ": nodes that close are not distinct in double precision");
+}
+
+}  // namespace kdmesh
