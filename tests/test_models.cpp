@@ -25,9 +25,13 @@ MeshJob shipped_job(const std::string& name) {
   const BatchConfig cfg = load_batch_config(kModels + "all.yaml");
   for (MeshJob job : cfg.jobs)
     if (job.name == name) {
-      job.vtu.clear();  // assert on the summary; write nothing
-      job.summary.clear();
+      job.vtu.clear();  // assert on the summary; write nothing (the block's solver formats
+      job.summary.clear();  // included: batch outputs now default to the YAML's folder, models/)
       job.nodes.clear();
+      job.msh.clear();
+      job.inp.clear();
+      job.medit.clear();
+      job.boundary_vtu.clear();
       job.sizing.max_size *= kSizeFactor;
       for (SizingZone& z : job.sizing.zones) z.size *= kSizeFactor;
       return job;
