@@ -29,14 +29,10 @@ CliResult kdmesh(const std::string& args) {
 #endif
 }
 
-bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+using kdmesh::test::contains;
 
-fs::path fresh(const std::string& name) {
-  const fs::path d = tmpdir() / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+/// A fresh directory for one test.
+fs::path fresh(const std::string& name) { return kdmesh::test::fresh_dir(tmpdir(), name); }
 
 TEST(BoundedReads, DevZeroAndLinksToItAreRefused) {
   const fs::path d = fresh("zero");

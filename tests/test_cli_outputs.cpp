@@ -34,15 +34,10 @@ fs::path tmpdir() { return kdmesh::test::process_tmpdir("cli_outputs"); }
 
 CliResult kdmesh(const std::string& args) { return kdmesh::test::run_kdmesh(args, tmpdir()); }
 
-bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+using kdmesh::test::contains;
 
 /// A fresh directory for one test.
-fs::path fresh(const std::string& name) {
-  const fs::path d = tmpdir() / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path fresh(const std::string& name) { return kdmesh::test::fresh_dir(tmpdir(), name); }
 
 /// The cube [0, e]^3 as 12 outward triangles, written as STL.
 fs::path write_cube(const fs::path& p, double e) {

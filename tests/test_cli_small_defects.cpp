@@ -26,14 +26,10 @@ CliResult kdmesh(const std::string& args, const std::string& env = "") {
   return kdmesh::test::run_kdmesh(args, tmpdir(), env);
 }
 
-bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+using kdmesh::test::contains;
 
-fs::path fresh(const std::string& name) {
-  const fs::path d = tmpdir() / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+/// A fresh directory for one test.
+fs::path fresh(const std::string& name) { return kdmesh::test::fresh_dir(tmpdir(), name); }
 
 /// The box [x0, x0 + e] x [0, e]^2 as 12 outward triangles (every face split on one diagonal).
 void add_cube(kdmesh::SurfaceMesh& m, double x0, double e) {

@@ -28,6 +28,17 @@ inline std::filesystem::path process_tmpdir(const std::string& area) {
   return d;
 }
 
+/// True if `s` contains `part`.
+inline bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+/// A fresh (emptied) directory `name` under `base`.
+inline std::filesystem::path fresh_dir(const std::filesystem::path& base, const std::string& name) {
+  const std::filesystem::path d = base / name;
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
+
 inline std::string slurp(const std::filesystem::path& p) {
   std::ifstream f(p, std::ios::binary);
   std::stringstream s;
