@@ -120,6 +120,22 @@ TEST(ThicknessSizes, OpenGrooveFlanksAreNoGap) {
   EXPECT_EQ(add_thickness_sizes(s, q, o, segs).gaps, 0u);
 }
 
+// The two flanks of a wedge face back at each other but are no wall: their width goes to zero
+// at the edge they share, at every scale (hand.ply's 2.14 deg fold was refused at every size
+// while this term packed nodes into it). A prism whose cross-section has a 2.9 deg corner.
+TEST(ThicknessSizes, WedgeFlanksAreNoWall) {
+  SurfaceMesh m;
+  add_prism(m, {0, 0, 10, 0, 10, 0.5}, 0, 4);
+  const PreparedSurface s = prepared(std::move(m));
+  const SurfaceQuery q(s.mesh);
+  ThicknessOptions o;
+  o.max_size = 1;
+  WeightedSegments segs;
+  const ThicknessStats st = add_thickness_sizes(s, q, o, segs);
+  EXPECT_EQ(st.walls, 0u);
+  EXPECT_EQ(segs.size(), 0u);
+}
+
 MeshJob job_for(const SurfaceMesh& m, double size, const std::string& name) {
   MeshJob job;
   job.name = name;
