@@ -152,14 +152,25 @@ std::uint8_t judge_face(const std::uint32_t* fv, const NodeSet& nodes, const Pre
 BoundaryJudgement judge_boundary(const BoundaryFaces& faces, const NodeSet& nodes,
                                  const PreparedSurface& surface,
                                  const SurfaceQuery& query, const SizingField& sizing,
-                                 double tolerance) {
+                                 double tolerance, FaceVerdicts* cache) {
   const std::size_t nf = faces.size();
   std::vector<std::uint8_t> why(nf, 0);  // kFace* bits
   std::vector<float> how_far(nf, 0);
-  parallel_for(nf, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t f = b; f < e; ++f)
+  std::vector<std::uint32_t> todo;  // faces not in the cache
+  todo.reserve(nf);
+  for (std::size_t f = 0; f < nf; ++f) {
+    const FaceVerdicts::Verdict* v = cache ? cache->find(&faces.verts[3 * f]) : nullptr;
+    if (v) why[f] = v->why, how_far[f] = v->how_far;
+    else todo.push_back(std::uint32_t(f));
+  }
+  parallel_for(todo.size(), [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t k = b; k < e; ++k) {
+      const std::size_t f = todo[k];
       why[f] = judge_face(&faces.verts[3 * f], nodes, surface, query, sizing, tolerance, &how_far[f]);
+    }
   }, 256);
+  if (cache)
+    for (std::uint32_t f : todo) cache->put(&faces.verts[3 * std::size_t(f)], {why[f], how_far[f]});
   BoundaryJudgement j;
   for (std::size_t f = 0; f < nf; ++f) {
     if (!why[f]) continue;
@@ -177,5 +188,26 @@ BoundaryJudgement judge_boundary(const BoundaryFaces& faces, const NodeSet& node
   j.faces_at_bad_vertices = std::move(d.faces_at_bad_vertices);
   return j;
 }
+
+namespace {
+std::array<std::uint32_t, 3> oriented_key(const std::uint32_t* fv) {
+  const int m = fv[0] < fv[1] ? (fv[0] < fv[2] ? 0 : 2) : (fv[1] < fv[2] ? 1 : 2);
+  return {fv[m], fv[(m + 1) % 3], fv[(m + 2) % 3]};
+}
+}  // namespace
+
+std::size_t FaceVerdicts::Hash::operator()(const std::array<std::uint32_t, 3>& k) const {
+  std::uint64_t h = k[0];
+  h = h * 0x9E3779B97F4A7C15ull ^ k[1];
+  h = h * 0x9E3779B97F4A7C15ull ^ k[2];
+  return std::size_t(h ^ (h >> 29));
+}
+
+const FaceVerdicts::Verdict* FaceVerdicts::find(const std::uint32_t* fv) const {
+  const auto it = map_.find(oriented_key(fv));
+  return it == map_.end() ? nullptr : &it->second;
+}
+
+void FaceVerdicts::put(const std::uint32_t* fv, Verdict v) { map_[oriented_key(fv)] = v; }
 
 }  // namespace kdmesh

@@ -481,6 +481,7 @@ VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query
   std::vector<std::uint8_t> inside;
   BoundaryFaces bf;
   std::size_t folds_peeled = 0;  // all-surface tets taken out of the solid (peel_folds)
+  FaceVerdicts verdicts;         // boundary faces judged in earlier rounds (same node ids)
   for (int round = 0;; ++round) {
     if (round == 0 || rebuild) {
       dr = triangulate(nodes, options, st);
@@ -503,13 +504,13 @@ VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query
     // the independent check more densely, so the margin keeps its verdict the same.
     const double tolerance = 0.8 * options.hausdorff_tolerance;
     bf = boundary_faces(dr.tri, inside);
-    BoundaryJudgement judge = judge_boundary(bf, nodes, surface, query, sizing, tolerance);
+    BoundaryJudgement judge = judge_boundary(bf, nodes, surface, query, sizing, tolerance, &verdicts);
     if (!judge.bad_faces.empty() || !judge.bad_vertices.empty() || !judge.bad_edges.empty()) {
       const std::size_t peeled = peel_folds(dr.tri, nodes, surface, query, sizing, tolerance, bf, judge, inside);
       if (peeled > 0) {
         folds_peeled += peeled;
         bf = boundary_faces(dr.tri, inside);
-        judge = judge_boundary(bf, nodes, surface, query, sizing, tolerance);
+        judge = judge_boundary(bf, nodes, surface, query, sizing, tolerance, &verdicts);
       }
     }
     // Kept tets that are flat at rounding level (4 nodes coplanar up to rounding, e.g. lattice
@@ -665,6 +666,7 @@ VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query
       }
     }
     nodes = rebuild_nodes(nodes, drop, steiner);
+    if (rebuild) verdicts.clear();  // the ids changed
   }
 
   // ---- result: inside tets, boundary, regions; nodes no inside tet uses are removed ----

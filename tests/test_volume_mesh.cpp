@@ -12,6 +12,7 @@
 
 #include "core/error.h"
 #include "core/rng.h"
+#include "mesher/boundary_faces.h"
 #include "mesher/mesh_check.h"
 #include "mesher/node_placement.h"
 #include "mesher/predicates.h"
@@ -404,6 +405,26 @@ TEST(VolumeMesh, ConcaveEdgeNeedsSteinerPoints) {
 // void face (d > 0.5), so the square's faces are not Delaunay: the node lands on boundary
 // faces and must be dropped. (Next to a convex hull face it would not: hull faces are always
 // Delaunay.)
+// The recovery judges only the boundary faces it has not judged in an earlier round. A verdict
+// depends on the face's orientation (a face whose normal points against the surface is bad),
+// so the cache finds a face under any rotation of its vertices but never reversed.
+TEST(FaceVerdicts, KeyedByTheOrientedFace) {
+  FaceVerdicts c;
+  const std::uint32_t f[3] = {7, 3, 5};
+  c.put(f, {kFaceAgainst, 0.25f});
+  for (const std::array<std::uint32_t, 3> r : {std::array<std::uint32_t, 3>{7, 3, 5}, {3, 5, 7}, {5, 7, 3}}) {
+    const FaceVerdicts::Verdict* v = c.find(r.data());
+    ASSERT_NE(v, nullptr);
+    EXPECT_EQ(v->why, kFaceAgainst);
+    EXPECT_EQ(v->how_far, 0.25f);
+  }
+  for (const std::array<std::uint32_t, 3> r : {std::array<std::uint32_t, 3>{7, 5, 3}, {3, 7, 5}, {5, 3, 7}})
+    EXPECT_EQ(c.find(r.data()), nullptr);
+  EXPECT_EQ(c.size(), 1u);
+  c.clear();
+  EXPECT_EQ(c.find(f), nullptr);
+}
+
 TEST(VolumeMesh, InteriorNodeTooCloseToSurfaceIsDropped) {
   Voxels vx = Voxels::block(3, 3, 3, 1.0);
   vx.set(1, 1, 1, false);
