@@ -101,20 +101,33 @@ bool boundary_edge(const ImproveTets& m, std::uint32_t a, std::uint32_t b) {
 bool remove_cap(ImproveTets& m, std::uint32_t t, const CapContext& ctx) {
   if (!m.alive(t)) return false;
   const std::uint32_t* v = m.v(t);
-  int bnd[2], inner[2], nb = 0, ni = 0;
+  int bnd[3], inner[2], nb = 0, ni = 0;
   for (int f = 0; f < 4; ++f) {
     if (m.adj(t, f) == kImproveNone) {
-      if (nb == 2) return false;
+      if (nb == 3) return false;
       bnd[nb++] = f;
     } else {
       if (ni == 2) return false;
       inner[ni++] = f;
     }
   }
-  if (nb != 2) return false;
   const NodeSet& nodes = m.nodes();
   for (int k = 0; k < 4; ++k)
     if (nodes.kind[v[k]] == NodeKind::interior) return false;
+  if (nb == 3) {
+    // Three boundary faces around the apex opposite the one inner face: when the apex is a
+    // surface node in no other tet, taking t out drops the apex and exposes the inner face
+    // (the removal of a neighbouring cap can leave such a tet, 1.3 deg on a sphere).
+    static thread_local std::vector<std::uint32_t> star;
+    const std::uint32_t apex = v[inner[0]];
+    if (nodes.kind[apex] != NodeKind::surface) return false;
+    m.star(apex, star);
+    if (star.size() != 1) return false;
+    const int f = inner[0];
+    if (!face_on_surface(m.p(v[kFace[f][0]]), m.p(v[kFace[f][2]]), m.p(v[kFace[f][1]]), ctx)) return false;
+    return m.remove(t, apex);
+  }
+  if (nb != 2) return false;
   // The boundary faces are opposite vertices bnd[0], bnd[1]; they share the edge of the two
   // other vertices (inner[0], inner[1]), which the removal flips to (bnd[0], bnd[1]).
   const std::uint32_t k0 = v[inner[0]], k1 = v[inner[1]];

@@ -30,7 +30,9 @@ struct CapContext {
 /// surface-kind end (so it is no feature edge), the edge between its other two vertices is
 /// not a boundary edge already (the boundary stays a 2-manifold), and both faces it exposes
 /// face outward (against the normal of the closest facet) within ctx.max_distance of the
-/// surface. Returns true if it removed t.
+/// surface. Also removes a tet with three boundary faces whose apex (the vertex they share) is
+/// a surface node in no other tet, when the face it exposes lies on the surface likewise; the
+/// apex is then unused (write_back drops it). Returns true if it removed t.
 bool remove_cap(ImproveTets& m, std::uint32_t t, const CapContext& ctx);
 
 }  // namespace kdmesh

@@ -207,7 +207,7 @@ std::uint32_t ImproveTets::add_interior_node(const double* p, float h) {
   return std::uint32_t(nodes_->size_count() - 1);
 }
 
-bool ImproveTets::remove(std::uint32_t t) {
+bool ImproveTets::remove(std::uint32_t t, std::uint32_t may_orphan) {
   const std::uint32_t* tv = &tv_[4 * std::size_t(t)];
   // Each vertex w of t needs a neighbour tet (across a face of t holding w) to stand for it.
   std::uint32_t stand_in[4];
@@ -215,7 +215,7 @@ bool ImproveTets::remove(std::uint32_t t) {
     stand_in[i] = kImproveNone;
     for (int f = 0; f < 4 && stand_in[i] == kImproveNone; ++f)
       if (f != i && ta_[4 * std::size_t(t) + f] != kImproveNone) stand_in[i] = ta_[4 * std::size_t(t) + f] >> 2;
-    if (stand_in[i] == kImproveNone) return false;
+    if (stand_in[i] == kImproveNone && tv[i] != may_orphan) return false;
   }
   for (int i = 0; i < 4; ++i) {
     const std::uint32_t r = ta_[4 * std::size_t(t) + i];

@@ -55,9 +55,10 @@ class ImproveTets {
   std::uint32_t add_interior_node(const double* p, float h);
   /// Removes tet t from the domain: its faces shared with other tets become boundary faces.
   /// Returns false (and changes nothing) if a vertex of t is in no other tet through those
-  /// faces (it would be left without a tet). The caller decides whether the new boundary is
+  /// faces (it would be left without a tet), unless that vertex is `may_orphan`: it is then
+  /// left unused (write_back drops it). The caller decides whether the new boundary is
   /// acceptable (mesher/improve_caps.h).
-  bool remove(std::uint32_t t);
+  bool remove(std::uint32_t t, std::uint32_t may_orphan = kImproveNone);
   /// The live tets incident to v, by a walk over face neighbours from vertex_tet(v).
   /// Thread-safe (reads only), as are v(), adj(), p().
   void star(std::uint32_t v, std::vector<std::uint32_t>& out) const;

@@ -176,6 +176,31 @@ TEST(ImproveFlips, FaceRemovalIsTheTwoThreeFlip) {
   }
 }
 
+// A tet with three boundary faces around its apex p (its only tet): removing it would leave p
+// without a tet, so remove() refuses unless p may be orphaned; then the other tet stays, with
+// the shared face now on the boundary, and write_back drops p (a flat cap of this shape was
+// the worst tet, 1.3 deg, of a sphere after the cap pass).
+TEST(ImproveTets, RemovingATetMayOrphanOnlyTheVertexAllowed) {
+  NodeSet n = interior_nodes({{0, 0, 0}, {3, 0, 0}, {0, 3, 0}, {1, 1, 0.05}, {1, 1, -1}});
+  const std::uint32_t a = 0, b = 1, c = 2, p = 3, q = 4;
+  std::vector<std::uint32_t> tets = positive(n, a, b, c, p);
+  const auto t2 = positive(n, a, b, c, q);
+  tets.insert(tets.end(), t2.begin(), t2.end());
+  ImproveTets m(n, tets, {0, 0});
+  EXPECT_FALSE(m.remove(0));
+  EXPECT_FALSE(m.remove(0, a));  // a has the other tet; p is still left without one
+  EXPECT_EQ(m.live(), 2u);
+  ASSERT_TRUE(m.remove(0, p));
+  EXPECT_EQ(m.live(), 1u);
+  EXPECT_FALSE(m.alive(0));
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(m.adj(1, k), kImproveNone);
+  std::vector<std::uint32_t> star;
+  m.star(p, star);
+  EXPECT_TRUE(star.empty());
+  m.star(a, star);
+  EXPECT_EQ(star, std::vector<std::uint32_t>{1});
+}
+
 // When pq misses the face (q moved beyond edge bc), a new tet would be inverted: no flip.
 TEST(ImproveFlips, FaceRemovalRefusesWhenTheNewEdgeMissesTheFace) {
   NodeSet n = interior_nodes({{0, 0, 0}, {3, 0, 0}, {0, 3, 0}, {1, 1, 1}, {4, 4, -1}});
