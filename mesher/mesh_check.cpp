@@ -174,7 +174,7 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const PreparedSurface& surfa
   {
     std::ostringstream ex;
     for (std::size_t k = 0; k < bverts.size(); ++k)
-      if (vdist[k] > 1e-9 * diag && c.offsurface_vertices++ < kShow)
+      if (vdist[k] > kOnSurfaceDistance * diag && c.offsurface_vertices++ < kShow)
         ex << " " << bverts[k] << " at " << xyz(pts.p(bverts[k])) << " (distance " << vdist[k] << ")";
     if (c.offsurface_vertices)
       c.failures.push_back(std::to_string(c.offsurface_vertices) +

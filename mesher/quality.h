@@ -26,6 +26,14 @@ double volume_length(const double* a, const double* b, const double* c, const do
 /// (its vertices are coplanar up to the rounding of their coordinates).
 inline constexpr double kZeroVolumeLength = 1e-9;
 
+/// A point this close to the surface, relative to the surface's bounding-box diagonal, counts
+/// as on it: boundary vertices in the mesh check, tet centroids in the inside/outside
+/// classification. Relative to the extent, so independent of scale; the coordinates' rounding
+/// (relative to their magnitude) must stay below it, which bounds how far from the origin a
+/// model may lie (tools/lib/numeric_ranges.h, kMaxMagnitudePerExtent), and legitimate tets must
+/// be thicker, which bounds the smallest size (kMinSizePerExtent).
+inline constexpr double kOnSurfaceDistance = 1e-9;
+
 /// Measures of the tet (a, b, c, d), each pointing to xyz.
 TetQuality tet_quality(const double* a, const double* b, const double* c, const double* d);
 

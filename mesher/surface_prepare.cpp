@@ -7,7 +7,7 @@
 // same point are in one fan when their facets share an edge through that point), shells by a
 // union-find over facets. Geometry is decided by exact predicates only: CGAL Epick's
 // collinear() for degenerate facets, PMP::self_intersections for intersections, and
-// Side_of_triangle_mesh (ray parity with exact predicates) for nesting. Shell volumes are
+// ray_parity::side (segment parity with exact predicates, mesher/ray_parity.h) for nesting. Shell volumes are
 // floating-point sums and are used only for their sign and the reported volumes; a closed
 // oriented 2-manifold without self-intersections encloses a region of positive measure, so
 // the sign is only at risk for shells of near-zero volume relative to their coordinates.
@@ -15,7 +15,6 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
-#include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
@@ -28,6 +27,8 @@
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "mesher/ray_parity.h"
 
 namespace kdmesh {
 
@@ -490,17 +491,25 @@ PreparedSurface prepare_surface(SurfaceMesh mesh, const std::string& source,
         if (in.min(d) < out_box.min(d) || in.max(d) > out_box.max(d)) return false;
       return true;
     };
-    std::vector<std::unique_ptr<Mesh>> meshes(ns);
-    std::vector<std::unique_ptr<CGAL::Side_of_triangle_mesh<Mesh, K>>> side(ns);
+    // Per shell, built when first needed: its facets and their AABB tree.
+    struct ShellTree {
+      ray_parity::Triangles triangles;
+      ray_parity::Tree tree;
+    };
+    std::vector<std::unique_ptr<ShellTree>> side(ns);
     for (std::uint32_t a = 0; a < ns; ++a) {
-      const Point q = P(tris[3 * shell_first[a]]);
+      const double* q = pts.p(tris[3 * shell_first[a]]);
       for (std::uint32_t b = 0; b < ns; ++b) {
         if (a == b || !inside_box(box[a], box[b])) continue;
         if (!side[b]) {
-          meshes[b] = build_mesh(b);
-          side[b] = std::make_unique<CGAL::Side_of_triangle_mesh<Mesh, K>>(*meshes[b]);
+          side[b] = std::make_unique<ShellTree>();
+          for (std::uint32_t f = 0; f < nf; ++f)
+            if (tri_shell[f] == b) side[b]->triangles.emplace_back(P(tris[3 * f]), P(tris[3 * f + 1]), P(tris[3 * f + 2]));
+          side[b]->tree.insert(side[b]->triangles.cbegin(), side[b]->triangles.cend());
+          side[b]->tree.build();
         }
-        const CGAL::Bounded_side where = (*side[b])(q);
+        const int s = ray_parity::side(side[b]->tree, q);
+        const CGAL::Bounded_side where = s > 0 ? CGAL::ON_BOUNDED_SIDE : s < 0 ? CGAL::ON_UNBOUNDED_SIDE : CGAL::ON_BOUNDARY;
         if (where == CGAL::ON_BOUNDARY)
           fail(source, "shell " + std::to_string(a) + " touches shell " + std::to_string(b) +
                            " at point " + std::to_string(tris[3 * shell_first[a]]) + " " +

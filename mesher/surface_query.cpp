@@ -1,12 +1,6 @@
-// kdmesh — SurfaceQuery: CGAL AABB tree adapter (CGAL types stay in this file).
+// kdmesh — SurfaceQuery: CGAL AABB tree adapter (CGAL types stay in this file and mesher/ray_parity).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "mesher/surface_query.h"
-
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Polygon_mesh_processing/internal/Side_of_triangle_mesh/Point_inside_vertical_ray_cast.h>
 
 #include <algorithm>
 #include <array>
@@ -15,14 +9,15 @@
 #include <vector>
 
 #include "core/error.h"
+#include "mesher/ray_parity.h"
 
 namespace kdmesh {
 
 namespace {
-using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Triangles = std::vector<K::Triangle_3>;
-using Primitive = CGAL::AABB_triangle_primitive<K, Triangles::const_iterator>;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+using K = ray_parity::K;
+using Triangles = ray_parity::Triangles;
+using Primitive = ray_parity::Primitive;
+using Tree = ray_parity::Tree;
 }  // namespace
 
 /// Facet bounding boxes binned on a uniform grid: which facets a small box may touch, with
@@ -100,6 +95,7 @@ struct SurfaceQuery::Impl {
   Triangles triangles;
   Tree tree;
   BoxGrid boxes;
+  double magnitude = 0;  // largest |coordinate| of the surface
 };
 
 SurfaceQuery::SurfaceQuery(const SurfaceMesh& surface) : impl_(std::make_unique<Impl>()) {
@@ -117,21 +113,14 @@ SurfaceQuery::SurfaceQuery(const SurfaceMesh& surface) : impl_(std::make_unique<
   impl_->tree.build();
   impl_->tree.accelerate_distance_queries();
   impl_->boxes.build(impl_->triangles);
+  for (const double x : surface.points.xyz) impl_->magnitude = std::max(impl_->magnitude, std::fabs(x));
 }
 
 SurfaceQuery::~SurfaceQuery() = default;
 
 int SurfaceQuery::side(const double* p) const {
-  const K::Point_3 q(p[0], p[1], p[2]);
-  const CGAL::Bbox_3 box = impl_->tree.bbox();
-  if (q.x() < box.xmin() || q.x() > box.xmax() || q.y() < box.ymin() || q.y() > box.ymax() ||
-      q.z() < box.zmin() || q.z() > box.zmax())
-    return -1;
-  // Parity of the crossings of a ray (vertical first, random ones if it grazes an edge):
-  // right for nested shells too. Filtered-exact predicates decide each crossing.
-  const CGAL::Bounded_side s =
-      CGAL::internal::Point_inside_vertical_ray_cast<K, Tree>()(q, impl_->tree);
-  return s == CGAL::ON_BOUNDED_SIDE ? 1 : s == CGAL::ON_UNBOUNDED_SIDE ? -1 : 0;
+  // Parity of a segment's crossings, exact at any magnitude: mesher/ray_parity.h.
+  return ray_parity::side(impl_->tree, p);
 }
 
 double SurfaceQuery::closest(const double* p, double* out, std::uint32_t* facet) const {
@@ -154,7 +143,17 @@ double SurfaceQuery::ray_distance(const double* origin, const double* dir, std::
                                   std::uint32_t* hit_facet) const {
   if (hit_facet) *hit_facet = kNoFacet;
   const K::Point_3 o(origin[0], origin[1], origin[2]);
-  const K::Vector_3 d(dir[0], dir[1], dir[2]);
+  // The ray stores o + d, and CGAL's ray-triangle code rebuilds the direction at a facet
+  // vertex a as a + ((o + d) - o): each sum is rounded to ulp(|x|) = 2^(e-52) of the
+  // coordinates, so a direction of fixed length (the callers' unit normals) loses all its bits
+  // from |x| = 2^53 (a degenerate ray: CGAL assertion) and is bent well before. Scaled by a
+  // power of two (exact, undone on t below) to at least the coordinates' magnitude, d keeps
+  // its direction to a relative 2^-52 at every scale.
+  const double dmax = std::max({std::fabs(dir[0]), std::fabs(dir[1]), std::fabs(dir[2])});
+  if (!(dmax > 0) || !std::isfinite(dmax)) return std::numeric_limits<double>::infinity();
+  const double reach = std::max({impl_->magnitude, std::fabs(origin[0]), std::fabs(origin[1]), std::fabs(origin[2])});
+  const int shift = reach > 0 ? std::ilogb(reach) + 1 - std::ilogb(dmax) : 0;
+  const K::Vector_3 d(std::ldexp(dir[0], shift), std::ldexp(dir[1], shift), std::ldexp(dir[2], shift));
   const double dd = d.squared_length();
   if (!(dd > 0) || !std::isfinite(dd)) return std::numeric_limits<double>::infinity();
   const auto begin = impl_->triangles.cbegin();
@@ -168,7 +167,7 @@ double SurfaceQuery::ray_distance(const double* origin, const double* dir, std::
   } else if (const K::Segment_3* sgm = boost::get<K::Segment_3>(&hit->first)) {
     t = std::sqrt(std::min(CGAL::squared_distance(o, sgm->source()), CGAL::squared_distance(o, sgm->target())) / dd);
   }
-  return t;
+  return std::ldexp(t, shift);  // in units of |dir|
 }
 
 double SurfaceQuery::distance(const double* p) const {

@@ -495,7 +495,7 @@ VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query
     }
     Stopwatch sw;
     if (options.progress) options.progress("classify", 0);
-    inside = classify(dr.tri, nodes, query, 1e-9 * diag, st);
+    inside = classify(dr.tri, nodes, query, kOnSurfaceDistance * diag, st);
     st.classify_seconds += sw.seconds();
     if (options.progress) options.progress("classify", 1);
 

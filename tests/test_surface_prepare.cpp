@@ -180,6 +180,23 @@ TEST(SurfacePrepare, NestedCubeIsAVoidOrientedInward) {
   }
 }
 
+// Nesting at every magnitude: the inner cube's first point (1, 1, 1) lies below the outer
+// top face's diagonal, so the inside test must leave the vertical direction; up to issue 19
+// (CGAL's Side_of_triangle_mesh, rays of unit length) the void was missed from 2^53 up and
+// the shells came out as two bodies. Scaling by 2^k is exact, and so are the volumes.
+TEST(SurfacePrepare, NestedCubeIsAVoidAtEveryMagnitude) {
+  for (int k = -300; k <= 300; k += 10) {
+    Builder b;
+    const double s = std::ldexp(1.0, k);
+    b.box(0, 0, 0, 3 * s);
+    b.box(s, s, s, s);
+    const PreparedSurface p = prepare_surface(b.m, "nested");
+    EXPECT_EQ(p.num_bodies, 1u) << "2^" << k;
+    EXPECT_EQ(p.shell_parent, (std::vector<std::uint32_t>{kNoFacet, 0})) << "2^" << k;
+    EXPECT_EQ(p.volume, 26 * s * s * s) << "2^" << k;
+  }
+}
+
 TEST(SurfacePrepare, IslandInsideAVoidIsASecondBody) {
   Builder b;
   b.box(2, 2, 2, 1, /*inward=*/true);  // shell 0: island, volume 1, given inward

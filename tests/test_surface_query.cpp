@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <vector>
 #include <utility>
 
 #include "core/rng.h"
@@ -87,6 +88,42 @@ TEST(SurfaceQuery, BoxCertificateIsExactlyTheFacetBoxOverlap) {
   // Both branches were exercised.
   EXPECT_GT(certified, 100);
   EXPECT_GT(touching, 100);
+}
+
+// The side of a point is exact at every magnitude. Points on a grid in a cube of side 2^k
+// include the centre and others whose vertical line meets the facets' diagonals, so the
+// inside test must fall back from the vertical direction to others. Up to issue 19 that
+// fallback (CGAL's Point_inside_vertical_ray_cast) cast rays p + u of a unit vector u, whose
+// direction is rounded away at coordinates of 2^52 and beyond: the cube's centre came out
+// "outside" from k = 52, and at k >= 54 every point on such a line did (see ray_parity.h).
+TEST(SurfaceQuery, SideIsExactAtEveryMagnitude) {
+  SurfaceMesh unit;
+  for (int i = 0; i < 8; ++i) unit.points.push_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+  const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads)
+    for (const std::uint32_t v : {q[0], q[1], q[2], q[0], q[2], q[3]}) unit.tris.push_back(v);
+  constexpr int n = 8;  // grid steps per side: i / n is exact, on and off the diagonals
+  // Every binade from near the smallest normal doubles to near the largest (the grid's
+  // coordinates stay normal and finite), and each side of 2^52 and 2^53 closely.
+  std::vector<int> exps;
+  for (int k = -1000; k <= 1000; k += 50) exps.push_back(k);
+  for (int k = 48; k <= 58; ++k) exps.push_back(k);
+  for (const int k : exps) {
+    SurfaceMesh m = unit;
+    for (double& x : m.points.xyz) x = std::ldexp(x, k);
+    const SurfaceQuery q(m);
+    int wrong = 0;
+    for (int i = -1; i <= n + 1; ++i)
+      for (int j = -1; j <= n + 1; ++j)
+        for (int l = -1; l <= n + 1; ++l) {
+          const double p[3] = {std::ldexp(double(i) / n, k), std::ldexp(double(j) / n, k), std::ldexp(double(l) / n, k)};
+          const auto in = [](int c) { return c > 0 && c < n; };
+          const auto out = [](int c) { return c < 0 || c > n; };
+          const int expected = in(i) && in(j) && in(l) ? 1 : out(i) || out(j) || out(l) ? -1 : 0;
+          wrong += q.side(p) != expected;
+        }
+    EXPECT_EQ(wrong, 0) << "cube of side 2^" << k;
+  }
 }
 
 TEST(SurfaceQuery, BoxesTouchingAtOnePointCount) {

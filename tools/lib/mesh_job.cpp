@@ -497,7 +497,9 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
   log("reading " + job.input);
   SurfaceMesh raw = read_surface(job.input);
   sec["read"] = clock.seconds();
-  check_model_ranges(job, raw);  // coordinates after scaling, sizes against the model
+  // Coordinates after scaling, sizes against the model; the default min_size is raised to
+  // the smallest the mesher resolves.
+  const ModelRanges ranges = check_model_ranges(job, raw);
 
   clock.reset();
   log("preparing the surface (" + std::to_string(raw.points.size()) + " points, " +
@@ -506,6 +508,7 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
     j["notices"].push_back(n);
     log("notice: " + n);
   };
+  if (!ranges.note.empty()) notice(ranges.note);
   SurfaceOptions so;
   so.scale = job.scale;
   so.notice = notice;
@@ -555,6 +558,7 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
   sec["query"] = clock.seconds();
 
   SizingOptions sizing_options = job.sizing;
+  sizing_options.min_size = ranges.min_size;
   sizing_options.curvature_angle_deg = job.curvature_angle;
   sizing_options.chordal_deviation = terms.chordal_deviation;
   sizing_options.feature_angle_deg = terms.feature_angle;

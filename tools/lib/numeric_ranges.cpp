@@ -42,14 +42,17 @@ void check_option_ranges(const MeshJob& job) {
     const std::string w = who + "zones[" + std::to_string(i) + "]" + (z.name.empty() ? "" : " (" + z.name + ")") + ": ";
     if (!(std::isfinite(z.size) && z.size > 0)) throw UsageError(w + "size " + num(z.size) + " must be finite and > 0");
     for (double c : z.coords)
-      if (!(std::isfinite(c) && std::fabs(c) <= kMaxCoordinate))
-        throw UsageError(w + "coordinate " + num(c) + " is outside [-" + num(kMaxCoordinate) + ", " +
-                         num(kMaxCoordinate) + "], where distances to it stay finite");
+      if (!(std::isfinite(c) && std::fabs(c) <= kMaxLength))
+        throw UsageError(w + "coordinate " + num(c) + " is outside [-" + num(kMaxLength) + ", " + num(kMaxLength) +
+                         "] = +-2^120, where distances to it stay finite");
   }
 }
 
-void check_model_ranges(const MeshJob& job, const SurfaceMesh& raw) {
-  if (raw.points.size() == 0) return;  // prepare_surface reports empty models
+ModelRanges check_model_ranges(const MeshJob& job, const SurfaceMesh& raw) {
+  const double size = job.sizing.max_size;
+  const bool given = job.sizing.min_size > 0 && job.sizing.min_size != size / 1000;  // not the default
+  ModelRanges out{given ? job.sizing.min_size : size / 1000, {}};
+  if (raw.points.size() == 0) return out;  // prepare_surface reports empty models
   double lo[3], hi[3], magnitude = 0;
   for (int k = 0; k < 3; ++k) lo[k] = hi[k] = raw.points.p(0)[k];
   for (std::size_t i = 0; i < raw.points.size(); ++i)
@@ -68,28 +71,42 @@ void check_model_ranges(const MeshJob& job, const SurfaceMesh& raw) {
                                                   (d2 / big) * (d2 / big)) * s
                                  : 0;
   const std::string scaled = s != 1 ? " after scaling by " + num(s) : std::string();
-  if (!(std::isfinite(m) && m <= kMaxCoordinate))
+  if (!(std::isfinite(m) && m <= kMaxLength))
     throw InputError(job.input, 0,
-                     "coordinates up to " + num(magnitude) + scaled + " (" + num(m) + ") exceed " + num(kMaxCoordinate) +
-                         ", the largest magnitude the mesher computes with exactly and finitely; scale the model down (--scale)");
-  if (big > 0 && !(extent >= kMinExtent))
+                     "coordinates up to " + num(magnitude) + scaled + " (" + num(m) + ") exceed " + num(kMaxLength) +
+                         " = 2^120, the largest length the mesher computes with exactly and finitely; scale the model down (--scale)");
+  if (big > 0 && !(extent >= kMinLength))
     throw InputError(job.input, 0,
                      "the model's extent (bounding-box diagonal) is " + num(extent) + scaled + ", below " +
-                         num(kMinExtent) + ", the smallest the mesher computes with exactly and finitely; scale the model up (--scale)");
-  const double size = job.sizing.max_size;
+                         num(kMinLength) + " = 2^-120, the smallest length the mesher computes with exactly and finitely; scale the model up (--scale)");
+  if (big > 0 && m > kMaxMagnitudePerExtent * extent)
+    throw InputError(job.input, 0,
+                     "the model lies too far from the origin for its size: coordinates up to " + num(m) + scaled +
+                         " are more than " + num(kMaxMagnitudePerExtent) + " = 2^21 times its extent (bounding-box diagonal) " +
+                         num(extent) + ", and the rounding of points on its surface would exceed the mesh check's tolerance " +
+                         "(1e-9 x the extent); move the model towards the origin");
   if (size > kMaxSizePerExtent * extent && extent > 0)
     throw UsageError("job '" + job.name + "': size (--size) " + num(size) + " is more than " + num(kMaxSizePerExtent) +
                      " times the model's extent " + num(extent) + scaled + "; a size of " + num(extent) +
                      " already gives the coarsest mesh");
-  const double min_size = job.sizing.min_size > 0 ? job.sizing.min_size : size / 1000;
-  const bool given = job.sizing.min_size > 0 && job.sizing.min_size != size / 1000;  // not the default
-  const double floor = kMinSizePerMagnitude * std::max(m, extent);
-  if (min_size < floor)
-    throw UsageError("job '" + job.name + "': " +
-                     (given ? "min_size (--min-size) " + num(min_size)
-                                              : "size (--size) " + num(size) + " (min_size = size / 1000 = " + num(min_size) + ")") +
-                     " is below " + num(floor) + " = 2^-40 times the model's coordinates" + scaled +
-                     ": nodes that close are not distinct in double precision");
+  if (size > kMaxLength)
+    throw UsageError("job '" + job.name + "': size (--size) " + num(size) + " is above " + num(kMaxLength) +
+                     " = 2^120, the largest length the mesher computes with exactly and finitely");
+  const double relative = kMinSizePerExtent * extent;
+  const double floor = std::max(kMinLength, relative);
+  const std::string why = relative >= kMinLength
+                              ? " = 2^-22 times the model's extent" + scaled +
+                                    ": tets that small would be thinner than the tolerance (1e-9 x the extent) at which the mesher takes them for flat"
+                              : " = 2^-120, the smallest length the mesher computes with exactly and finitely";
+  if (size < floor)
+    throw UsageError("job '" + job.name + "': size (--size) " + num(size) + " is below " + num(floor) + why);
+  if (given && out.min_size < floor)
+    throw UsageError("job '" + job.name + "': min_size (--min-size) " + num(out.min_size) + " is below " + num(floor) + why);
+  if (!given && out.min_size < floor) {
+    out.note = "min_size raised from " + num(out.min_size) + " (size / 1000) to " + num(floor) + why;
+    out.min_size = floor;
+  }
+  return out;
 }
 
 }  // namespace kdmesh
