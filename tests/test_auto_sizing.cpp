@@ -79,13 +79,18 @@ TEST(SurfaceQueryRay, DistanceAndFacetOfTheFirstHit) {
   EXPECT_EQ(hit, kNoFacet);
 }
 
-TEST(ThicknessSizes, ThinPlateGetsTwoLayersAcross) {
-  const PreparedSurface s = prepared(box(0, 0, 0, 10, 10, 0.5));
+/// The thickness term of surface m (walls and gaps sized below max_size), its segments into segs.
+ThicknessStats thickness_of(SurfaceMesh m, double max_size, WeightedSegments& segs) {
+  const PreparedSurface s = prepared(std::move(m));
   const SurfaceQuery q(s.mesh);
   ThicknessOptions o;
-  o.max_size = 2;
+  o.max_size = max_size;
+  return add_thickness_sizes(s, q, o, segs);
+}
+
+TEST(ThicknessSizes, ThinPlateGetsTwoLayersAcross) {
   WeightedSegments segs;
-  const ThicknessStats st = add_thickness_sizes(s, q, o, segs);
+  const ThicknessStats st = thickness_of(box(0, 0, 0, 10, 10, 0.5), 2, segs);
   // The 4 facets of the two big faces see the other face 0.5 away; the side facets (10 or 0.5
   // wide) see the opposite side 10 away: above max_size.
   EXPECT_EQ(st.walls, 4u);
@@ -98,12 +103,8 @@ TEST(ThicknessSizes, ThinPlateGetsTwoLayersAcross) {
 TEST(ThicknessSizes, NarrowGapBetweenTwoBodies) {
   SurfaceMesh m = box(0, 0, 0, 4, 4, 4);
   add_prism(m, {4.3, 0, 8, 0, 8, 4, 4.3, 4}, 0, 4);
-  const PreparedSurface s = prepared(std::move(m));
-  const SurfaceQuery q(s.mesh);
-  ThicknessOptions o;
-  o.max_size = 1;
   WeightedSegments segs;
-  const ThicknessStats st = add_thickness_sizes(s, q, o, segs);
+  const ThicknessStats st = thickness_of(std::move(m), 1, segs);
   EXPECT_EQ(st.walls, 0u);
   EXPECT_EQ(st.gaps, 4u);  // two facets on each of the facing walls
   EXPECT_NEAR(st.min_gap, 0.3, 1e-12);
@@ -114,12 +115,8 @@ TEST(ThicknessSizes, OpenGrooveFlanksAreNoGap) {
   // 90 deg, not back, so they set no gap size.
   SurfaceMesh m;
   add_prism(m, {2, 1.5, 1.5, 2, 0, 2, 0, 0, 4, 0, 4, 2, 2.5, 2}, 0, 1);  // fanned from the notch
-  const PreparedSurface s = prepared(std::move(m));
-  const SurfaceQuery q(s.mesh);
-  ThicknessOptions o;
-  o.max_size = 1;
   WeightedSegments segs;
-  EXPECT_EQ(add_thickness_sizes(s, q, o, segs).gaps, 0u);
+  EXPECT_EQ(thickness_of(std::move(m), 1, segs).gaps, 0u);
 }
 
 // The two flanks of a wedge face back at each other but are no wall: their width goes to zero
@@ -128,12 +125,8 @@ TEST(ThicknessSizes, OpenGrooveFlanksAreNoGap) {
 TEST(ThicknessSizes, WedgeFlanksAreNoWall) {
   SurfaceMesh m;
   add_prism(m, {0, 0, 10, 0, 10, 0.5}, 0, 4);
-  const PreparedSurface s = prepared(std::move(m));
-  const SurfaceQuery q(s.mesh);
-  ThicknessOptions o;
-  o.max_size = 1;
   WeightedSegments segs;
-  const ThicknessStats st = add_thickness_sizes(s, q, o, segs);
+  const ThicknessStats st = thickness_of(std::move(m), 1, segs);
   EXPECT_EQ(st.walls, 0u);
   EXPECT_EQ(segs.size(), 0u);
 }
