@@ -423,3 +423,19 @@ TEST(JobConfig, ClosestMatch) {
 }
 
 }  // namespace
+
+namespace {
+// yaml-cpp 0.7's LoadAll loops forever on some broken streams, adding an empty document each
+// round (fuzz_config: two reproducers timed out; the smallest is a lone ","). The loader reads
+// the first document and probes the rest a bounded number of times: these end with an error,
+// and a real second document is still refused.
+TEST(JobConfig, BrokenStreamAfterTheDocumentEndsWithAnError) {
+  for (const char* text : {",\n", "jobs:\n  - name: a\n    input: parts/block.stl\n    size: 1\n,\n"}) {
+    SCOPED_TRACE(text);
+    load_error(text);  // returns: an InputError, not a hang
+  }
+  const InputError e = load_error("jobs:\n  - {name: a, input: parts/block.stl, size: 1}\n---\njobs: []\n");
+  EXPECT_EQ(e.line(), 4u);
+  EXPECT_TRUE(contains(e.what(), "second YAML document")) << e.what();
+}
+}  // namespace

@@ -3,6 +3,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "tools/lib/job_config.h"
 
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -602,6 +603,50 @@ class Loader {
 
 }  // namespace
 
+/// Counts what a document holds besides nulls, and where its first such event is.
+class DocumentProbe : public YAML::EventHandler {
+ public:
+  std::uint64_t first_line = 0;  ///< 1-based line of the first non-null event (0: none)
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark& m, YAML::anchor_t) override { seen(m); }
+  void OnScalar(const YAML::Mark& m, const std::string&, YAML::anchor_t, const std::string&) override { seen(m); }
+  void OnSequenceStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    seen(m);
+  }
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    seen(m);
+  }
+  void OnMapEnd() override {}
+
+ private:
+  void seen(const YAML::Mark& m) {
+    if (!first_line) first_line = m.line >= 0 ? std::uint64_t(m.line) + 1 : 1;
+  }
+};
+
+/// The line of the first non-null document after the first one (0: none). Not YAML::LoadAll:
+/// yaml-cpp 0.7 (Debian 12) loops forever in it on some broken input, each round adding an
+/// empty document (fuzz_config found two; fixed upstream in yaml-cpp PR 1319). A stream has at
+/// most one document per line, so the documents are probed up to that count.
+std::uint64_t second_document_line(const std::string& text) {
+  std::istringstream in(text);
+  YAML::Parser parser(in);
+  const std::size_t max_documents = std::size_t(std::count(text.begin(), text.end(), '\n')) + 2;
+  try {
+    for (std::size_t d = 0; d < max_documents; ++d) {
+      DocumentProbe probe;
+      if (!parser.HandleNextDocument(probe)) return 0;
+      if (d > 0 && probe.first_line) return probe.first_line;
+    }
+  } catch (const YAML::Exception& e) {  // an error after the first document: its line
+    return e.mark.line >= 0 ? std::uint64_t(e.mark.line) + 1 : 1;
+  }
+  return 0;
+}
+
 BatchConfig load_batch_config(const std::string& path, const BatchLoadOptions& options) {
   const double limit = effective_memory_limit(options.max_memory);
   std::string text;
@@ -615,21 +660,22 @@ BatchConfig load_batch_config(const std::string& path, const BatchLoadOptions& o
                                           " bytes of memory per byte; --max-memory)"
                                     : std::string()));
   }
-  std::vector<YAML::Node> docs;
-  try {
-    docs = YAML::LoadAll(text);
-  } catch (const YAML::Exception& e) {
+  auto syntax_error = [&](const YAML::Exception& e) {
     throw_input(path, e.mark.line >= 0 ? std::uint64_t(e.mark.line) + 1 : 0,
-                     "YAML syntax error" +
-                         (e.mark.column >= 0 ? " at column " + std::to_string(e.mark.column + 1) : std::string()) +
-                         ": " + e.msg);
+                "YAML syntax error" +
+                    (e.mark.column >= 0 ? " at column " + std::to_string(e.mark.column + 1) : std::string()) +
+                    ": " + e.msg);
+  };
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    syntax_error(e);
   }
-  for (std::size_t d = 1; d < docs.size(); ++d)
-    if (docs[d].IsDefined() && !docs[d].IsNull())
-      throw_input(path, line_of(docs[d]),
-                  "a second YAML document (after '---'): a batch file is one document; put every job in its "
-                  "'jobs' list");
-  const YAML::Node root = docs.empty() ? YAML::Node() : docs.front();
+  if (const std::uint64_t line = second_document_line(text))
+    throw_input(path, line,
+                "a second YAML document (after '---'): a batch file is one document; put every job in its "
+                "'jobs' list");
   const fs::path base = fs::path(path).parent_path();
   const fs::path out = options.out_dir.empty() ? base : fs::path(options.out_dir);
   try {
