@@ -7,7 +7,7 @@
 // same point are in one fan when their facets share an edge through that point), shells by a
 // union-find over facets. Geometry is decided by exact predicates only: CGAL Epick's
 // collinear() for degenerate facets, PMP::self_intersections for intersections, and
-// ray_parity::side (segment parity with exact predicates, mesher/ray_parity.h) for nesting. Shell volumes are
+// SurfaceQuery::side (segment parity with exact predicates, mesher/surface_query.cpp) for nesting. Shell volumes are
 // floating-point sums and are used only for their sign and the reported volumes; a closed
 // oriented 2-manifold without self-intersections encloses a region of positive measure, so
 // the sign is only at risk for shells of near-zero volume relative to their coordinates.
@@ -28,7 +28,7 @@
 #include <utility>
 #include <vector>
 
-#include "mesher/ray_parity.h"
+#include "mesher/surface_query.h"
 
 namespace kdmesh {
 
@@ -491,24 +491,31 @@ PreparedSurface prepare_surface(SurfaceMesh mesh, const std::string& source,
         if (in.min(d) < out_box.min(d) || in.max(d) > out_box.max(d)) return false;
       return true;
     };
-    // Per shell, built when first needed: its facets and their AABB tree.
-    struct ShellTree {
-      ray_parity::Triangles triangles;
-      ray_parity::Tree tree;
-    };
-    std::vector<std::unique_ptr<ShellTree>> side(ns);
+    // Per shell, built when first needed: a SurfaceQuery over its facets alone (its side()
+    // is the exact segment parity, mesher/surface_query.cpp).
+    std::vector<std::unique_ptr<SurfaceQuery>> side(ns);
     for (std::uint32_t a = 0; a < ns; ++a) {
       const double* q = pts.p(tris[3 * shell_first[a]]);
       for (std::uint32_t b = 0; b < ns; ++b) {
         if (a == b || !inside_box(box[a], box[b])) continue;
         if (!side[b]) {
-          side[b] = std::make_unique<ShellTree>();
-          for (std::uint32_t f = 0; f < nf; ++f)
-            if (tri_shell[f] == b) side[b]->triangles.emplace_back(P(tris[3 * f]), P(tris[3 * f + 1]), P(tris[3 * f + 2]));
-          side[b]->tree.insert(side[b]->triangles.cbegin(), side[b]->triangles.cend());
-          side[b]->tree.build();
+          SurfaceMesh shell;  // shell b, its points renumbered
+          std::vector<std::uint32_t> id(pts.size(), std::uint32_t(-1));
+          for (std::uint32_t f = 0; f < nf; ++f) {
+            if (tri_shell[f] != b) continue;
+            for (int k = 0; k < 3; ++k) {
+              std::uint32_t& v = id[tris[3 * f + k]];
+              if (v == std::uint32_t(-1)) {
+                v = std::uint32_t(shell.points.size());
+                const double* x = pts.p(tris[3 * f + k]);
+                shell.points.push_back(x[0], x[1], x[2]);
+              }
+              shell.tris.push_back(v);
+            }
+          }
+          side[b] = std::make_unique<SurfaceQuery>(shell);
         }
-        const int s = ray_parity::side(side[b]->tree, q);
+        const int s = side[b]->side(q);
         const CGAL::Bounded_side where = s > 0 ? CGAL::ON_BOUNDED_SIDE : s < 0 ? CGAL::ON_UNBOUNDED_SIDE : CGAL::ON_BOUNDARY;
         if (where == CGAL::ON_BOUNDARY)
           fail(source, "shell " + std::to_string(a) + " touches shell " + std::to_string(b) +

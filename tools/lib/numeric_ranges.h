@@ -13,7 +13,7 @@ namespace kdmesh {
 // same mesh, every coordinate scaled exactly (ExtremeNumbers.PowerOfTwoScalesGiveTheSameMesh,
 // over the whole range of the length bounds below). Two places were not, up to issue 19: the
 // inside/outside test and the thickness rays, which both built rays from directions of
-// length 1 (mesher/ray_parity.h, SurfaceQuery::ray_distance); that is what lost a 6e15 cube's
+// length 1 (mesher/surface_query.cpp: ray_parity::side, SurfaceQuery::ray_distance); that is what lost a 6e15 cube's
 // corner nodes, and why the former bound of 2^50 on coordinates had been measured. The bounds
 // on lengths below (kMaxLength, kMinLength, kMaxMagnitudePerExtent, kMinSizePerExtent) are
 // derived from the arithmetic, each formula next to its constant.
