@@ -145,11 +145,17 @@ TEST(ExtremeNumbers, EstimateMessagesStayFinite) {
   EXPECT_TRUE(contains(r.err, "more than ")) << r.err;  // a lower bound, said so
 }
 
-// A zone far outside the range where distances are finite is refused, not silently ignored.
-TEST(ExtremeNumbers, FarZoneIsRefused) {
-  const fs::path d = tmpdir() / "zone";
+/// A fresh scratch folder `name` holding a copy of the block as block.stl.
+fs::path dir_with_block(const std::string& name) {
+  const fs::path d = tmpdir() / name;
   fs::create_directories(d);
   fs::copy_file(kBlock, d / "block.stl", fs::copy_options::overwrite_existing);
+  return d;
+}
+
+// A zone far outside the range where distances are finite is refused, not silently ignored.
+TEST(ExtremeNumbers, FarZoneIsRefused) {
+  const fs::path d = dir_with_block("zone");
   std::ofstream(d / "jobs.yaml") << "jobs:\n  - name: far\n    input: block.stl\n    size: 20\n    zones:\n"
                                     "      - {type: segment, size: 2, from: [-1e75, 50, 50], to: [1e75, 50, 50]}\n";
   const CliResult r = kdmesh("batch " + (d / "jobs.yaml").string() + " -q");
@@ -160,9 +166,7 @@ TEST(ExtremeNumbers, FarZoneIsRefused) {
 
 // A job over its time limit is stopped and reported; the batch still ends with its summary.
 TEST(ExtremeNumbers, BatchTimeoutStopsTheJobAndTheBatchEnds) {
-  const fs::path d = tmpdir() / "timeout";
-  fs::create_directories(d);
-  fs::copy_file(kBlock, d / "block.stl", fs::copy_options::overwrite_existing);
+  const fs::path d = dir_with_block("timeout");
   std::ofstream(d / "jobs.yaml") << "jobs:\n  - {name: slow, input: block.stl, size: 1.5, timeout: 1, output: {vtu: slow.vtu}}\n"
                                     "  - {name: fast, input: block.stl, size: 25, output: {vtu: fast.vtu}}\n";
   const auto t0 = std::chrono::steady_clock::now();
