@@ -5,25 +5,10 @@
 #pragma once
 #include <cstdint>
 
+#include "mesher/improve_boundary.h"
 #include "mesher/improve_tets.h"
-#include "mesher/surface_prepare.h"
-#include "mesher/surface_query.h"
-#include "sizing/features.h"
-#include "sizing/sizing_field.h"
 
 namespace kdmesh {
-
-struct CapContext {
-  const PreparedSurface* surface = nullptr;
-  const SurfaceQuery* query = nullptr;
-  const SizingField* sizing = nullptr;
-  /// The exposed faces must lie within this many local sizes of the surface (at the 7 points
-  /// the mesh check samples, and its formula h(centroid)).
-  double max_distance = 0.08;
-  /// The surface's feature edges (the mesh keeps them). Null: a cap whose boundary edge has two
-  /// feature-node ends is always kept; else only when that edge runs along a feature edge.
-  const FeatureEdges* features = nullptr;
-};
 
 /// Removes tet t if it is a cap: exactly two of its faces are boundary faces, its four
 /// vertices are surface nodes (no interior node), the boundary edge the two faces share has a
@@ -33,6 +18,6 @@ struct CapContext {
 /// surface. Also removes a tet with three boundary faces whose apex (the vertex they share) is
 /// a surface node in no other tet, when the face it exposes lies on the surface likewise; the
 /// apex is then unused (write_back drops it). Returns true if it removed t.
-bool remove_cap(ImproveTets& m, std::uint32_t t, const CapContext& ctx);
+bool remove_cap(ImproveTets& m, std::uint32_t t, const BoundaryContext& ctx);
 
 }  // namespace kdmesh

@@ -30,32 +30,24 @@ bool flip_valid(const ImproveTets& m, const FlipCandidate& c) {
   return true;
 }
 
-bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::uint32_t b,
-                  int max_ring, FlipCandidate& out, double floor, const double* sines,
-                  bool validate) {
-  static thread_local std::vector<std::uint32_t> ring;
-  out.old.clear();
-  out.fresh.clear();
-  out.q_new = -1;
-  if (!m.edge_ring(t, a, b, ring, out.old)) return false;
+namespace {
+
+constexpr int kMaxRing = 16;
+
+/// The triangulation of the polygon ring[0..n-1] (closed by the edge (r_0, r_{n-1})) that
+/// maximises the smallest tet_sine of the tets (r_i r_j r_k a) and (r_i r_k r_j b), above
+/// `cut` (dynamic programme over sub-polygons): its tets go to out.fresh (the first two hold
+/// the edge (r_0, r_{n-1})), its worst to out.q_new. False if none beats `cut` with positive
+/// tets.
+bool best_triangulation(const ImproveTets& m, const std::vector<std::uint32_t>& ring,
+                        std::uint32_t a, std::uint32_t b, double cut, FlipCandidate& out) {
   const int n = int(ring.size());
-  if (n < 3 || n > max_ring) return false;
-  if (sines) {
-    out.q_old = std::numeric_limits<double>::infinity();
-    for (std::uint32_t o : out.old) out.q_old = std::min(out.q_old, sines[o]);
-  } else {
-    out.q_old = min_sine(m, out.old);
-  }
-  // Only triangulations better than `floor` and than the ring's own tets are of interest:
-  // sub-polygons that cannot beat it are cut off (-inf) without evaluating their tets.
-  const double cut = std::max(floor, out.q_old);
+  if (n < 3 || n > kMaxRing) return false;
   // Triangle (r_i, r_k, r_j), i < k < j, of the ring polygon: the tets (r_i r_j r_k a) and
   // (r_i r_k r_j b). With the ring ordered so that (a, b, r_i, r_{i+1}) is positive, the ring
-  // turns clockwise seen from a, so those two are the positive orders (checked exactly below).
-  constexpr int kMax = 16;
-  if (n > kMax) return false;
-  double best[kMax][kMax];
-  int arg[kMax][kMax];
+  // turns clockwise seen from a, so those two are the positive orders (checked exactly later).
+  double best[kMaxRing][kMaxRing];
+  int arg[kMaxRing][kMaxRing];
   const double inf = std::numeric_limits<double>::infinity();
   const double* pa = m.p(a);
   const double* pb = m.p(b);
@@ -63,7 +55,7 @@ bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::u
     const double *ri = m.p(ring[i]), *rk = m.p(ring[k]), *rj = m.p(ring[j]);
     return std::min(tet_sine(ri, rj, rk, pa), tet_sine(ri, rk, rj, pb));
   };
-  for (int i = 0; i + 1 < n; ++i) best[i][i + 1] = inf;
+  for (int i = 0; i + 1 < n; ++i) best[i][i + 1] = inf, arg[i][i + 1] = -1;
   for (int len = 2; len < n; ++len)
     for (int i = 0; i + len < n; ++i) {
       const int j = i + len;
@@ -80,8 +72,8 @@ bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::u
     }
   out.q_new = best[0][n - 1];
   if (arg[0][n - 1] < 0 || !(out.q_new > 0)) return false;
-  // Reconstruct.
-  int stack[2 * kMax][2], sp = 0;
+  // Reconstruct, the root triangle first.
+  int stack[2 * kMaxRing][2], sp = 0;
   stack[sp][0] = 0, stack[sp][1] = n - 1, ++sp;
   while (sp > 0) {
     --sp;
@@ -92,7 +84,63 @@ bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::u
     stack[sp][0] = i, stack[sp][1] = k, ++sp;
     stack[sp][0] = k, stack[sp][1] = j, ++sp;
   }
+  return true;
+}
+
+/// Smallest tet_sine of the tets `old`, from `sines` if given.
+double old_sine(const ImproveTets& m, const std::vector<std::uint32_t>& old, const double* sines) {
+  if (!sines) return min_sine(m, old);
+  double q = std::numeric_limits<double>::infinity();
+  for (std::uint32_t o : old) q = std::min(q, sines[o]);
+  return q;
+}
+
+}  // namespace
+
+bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::uint32_t b,
+                  int max_ring, FlipCandidate& out, double floor, const double* sines,
+                  bool validate) {
+  static thread_local std::vector<std::uint32_t> ring;
+  out.old.clear();
+  out.fresh.clear();
+  out.q_new = -1;
+  if (!m.edge_ring(t, a, b, ring, out.old)) return false;
+  const int n = int(ring.size());
+  if (n < 3 || n > max_ring) return false;
+  out.q_old = old_sine(m, out.old, sines);
+  // Only triangulations better than `floor` and than the ring's own tets are of interest:
+  // sub-polygons that cannot beat it are cut off without evaluating their tets.
+  if (!best_triangulation(m, ring, a, b, std::max(floor, out.q_old), out)) return false;
   return !validate || flip_valid(m, out);
+}
+
+bool boundary_edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::uint32_t b,
+                           int max_ring, const BoundaryContext& ctx, FlipCandidate& out,
+                           double floor, const double* sines) {
+  static thread_local std::vector<std::uint32_t> ring, star;
+  out.old.clear();
+  out.fresh.clear();
+  out.q_new = -1;
+  const NodeSet& nodes = m.nodes();
+  if (nodes.kind[a] == NodeKind::interior || nodes.kind[b] == NodeKind::interior) return false;
+  if (!m.open_edge_ring(t, a, b, max_ring - 1, ring, out.old)) return false;
+  const std::size_t n = ring.size();
+  if (n < 3) return false;  // one tet: a cap (mesher/improve_caps.h)
+  if (nodes.kind[a] != NodeKind::surface && nodes.kind[b] != NodeKind::surface &&
+      along_feature(m.p(a), m.p(b), ctx))
+    return false;  // a feature edge stays
+  // The new boundary edge (r_0, r_m) must not be an edge already.
+  const std::uint32_t r0 = ring.front(), rm = ring.back();
+  m.star(r0, star);
+  for (std::uint32_t s : star)
+    if (index_in(m.v(s), rm) >= 0) return false;
+  out.q_old = old_sine(m, out.old, sines);
+  if (!best_triangulation(m, ring, a, b, std::max(floor, out.q_old), out)) return false;
+  if (!flip_valid(m, out)) return false;
+  // The new boundary faces, outward: of the root tets (r_0 r_m r_k a) and (r_0 r_k r_m b), the
+  // faces opposite r_k, (r_0, r_m, a) and (r_0, b, r_m).
+  return face_on_surface(m.p(r0), m.p(rm), m.p(a), ctx) &&
+         face_on_surface(m.p(r0), m.p(b), m.p(rm), ctx);
 }
 
 bool face_removal(const ImproveTets& m, std::uint32_t t, int i, FlipCandidate& out,

@@ -1,11 +1,13 @@
 // kdmesh — topological operations of the quality-improvement pass: edge removal (the optimal
-// triangulation of an edge's ring: 3-2, 4-4, 5-6, ... flips) and face removal (the 2-3 flip).
+// triangulation of an edge's ring: 3-2, 4-4, 5-6, ... flips), its boundary form (a boundary
+// edge flipped within the surface) and face removal (the 2-3 flip).
 // Each is evaluated into a FlipCandidate first, so that a caller can pick the best one.
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
 #include <cstdint>
 #include <vector>
 
+#include "mesher/improve_boundary.h"
 #include "mesher/improve_tets.h"
 
 namespace kdmesh {
@@ -30,6 +32,18 @@ struct FlipCandidate {
 bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::uint32_t b,
                   int max_ring, FlipCandidate& out, double floor = -1,
                   const double* sines = nullptr, bool validate = true);
+
+/// Boundary edge removal: edge removal of an edge (a, b) on the boundary, whose open ring
+/// r_0..r_m (m + 1 >= 3 vertices, at most max_ring) is triangulated with the closing edge
+/// (r_0, r_m): the boundary faces (a, b, r_0) and (a, b, r_m) become (r_0, r_m, a) and
+/// (r_0, b, r_m), the boundary edge flip within the surface. Only where the surface allows
+/// it: (a, b) runs along no feature edge (an end is a surface node, or along_feature says
+/// no), (r_0, r_m) is not an edge yet, and both new faces lie on the surface within the
+/// context's tolerance (face_on_surface). Validated (flip_valid); the caller replaces with
+/// boundary_may_change. `floor` and `sines` as for edge_removal.
+bool boundary_edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::uint32_t b,
+                           int max_ring, const BoundaryContext& ctx, FlipCandidate& out,
+                           double floor = -1, const double* sines = nullptr);
 
 /// Face removal: face i of tet t (opposite p) shared with tet u (opposite q) replaced by the
 /// three tets around the new edge pq (a 2-3 flip). False on a boundary face or if pq does not

@@ -50,11 +50,13 @@ std::array<double, 3> min_norm_point(const std::vector<std::array<double, 3>>& g
 /// The star of one vertex with what a move must respect.
 class VertexStar {
  public:
-  /// False if v may not move (a feature node, a surface node off a planar fan, ...).
-  bool load(const ImproveTets& m, std::uint32_t v, const SmoothContext& ctx) {
+  /// False if v may not move (a feature node, a surface node off a planar fan unless
+  /// `curved` and ctx.boundary, ...).
+  bool load(const ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, bool curved) {
     m_ = &m;
     v_ = v;
     ctx_ = &ctx;
+    curved_ = false;
     const NodeKind kind = m.nodes().kind[v];
     on_surface_ = kind != NodeKind::interior;
     if (on_surface_ && (kind != NodeKind::surface || !ctx.surface || !ctx.query)) return false;
@@ -93,10 +95,21 @@ class VertexStar {
     const double nl = std::sqrt(dot3(n_, n_));
     if (!(nl > 0)) return false;
     for (double& c : n_) c /= nl;
-    // Every boundary face at v must lie in the facet's plane.
+    std::copy_n(n_, 3, tn_);
+    // Planar: every boundary face at v lies in the facet's plane.
     for (const auto& bf : bfaces_)
       for (std::uint32_t w : bf)
-        if (std::fabs(plane_offset(m.p(w))) > ctx.on_surface) return false;
+        if (std::fabs(plane_offset(m.p(w))) > ctx.on_surface) curved_ = true;
+    if (!curved_) return true;
+    if (!curved || !ctx.boundary) return false;
+    // Curved: v moves in the fan's tangent plane (normal: the sum of the faces' area normals)
+    // and back onto the surface.
+    std::fill_n(tn_, 3, 0.0);
+    for (const auto& bn : bnormal_)
+      for (int k = 0; k < 3; ++k) tn_[k] += bn[k];
+    const double tl = std::sqrt(dot3(tn_, tn_));
+    if (!(tl > 0)) return false;
+    for (double& c : tn_) c /= tl;
     return true;
   }
 
@@ -142,16 +155,23 @@ class VertexStar {
     if (inverted) out.ratio = -std::numeric_limits<double>::infinity();
     return out;
   }
-  /// Projects x onto the facet plane (surface nodes).
+  /// Projects x onto the facet plane (surface nodes of a planar fan) or onto the closest
+  /// point of the surface (curved fan).
   void project(double* x) const {
     if (!on_surface_) return;
+    if (curved_) {
+      double cp[3];
+      ctx_->query->closest(x, cp);
+      std::copy_n(cp, 3, x);
+      return;
+    }
     const double s = plane_offset(x);
     for (int k = 0; k < 3; ++k) x[k] -= s * n_[k];
   }
   void project_dir(double* g) const {
     if (!on_surface_) return;
-    const double s = dot3(g, n_);
-    for (int k = 0; k < 3; ++k) g[k] -= s * n_[k];
+    const double s = dot3(g, tn_);
+    for (int k = 0; k < 3; ++k) g[k] -= s * tn_[k];
   }
   /// Every tet valid, and for a surface node: every boundary face at v keeps its orientation
   /// and x stays on the surface. The boundary faces at v form a planar fan whose outer polygon
@@ -172,6 +192,16 @@ class VertexStar {
       double n[3];
       tri_normal(p[0], p[1], p[2], n);
       if (!(dot3(n, bnormal_[k].data()) > 0)) return false;
+    }
+    if (curved_) {
+      // Each face at v stays on the surface (the mesh check's sampling and tolerance); x is
+      // a closest surface point (project).
+      for (const auto& bf : bfaces_) {
+        const double* p[3];
+        for (int j = 0; j < 3; ++j) p[j] = bf[j] == v_ ? x : m_->p(bf[j]);
+        if (!face_on_surface(p[0], p[1], p[2], *ctx_->boundary)) return false;
+      }
+      return true;
     }
     // On the node's own facet (the common case on CAD facets): no surface query needed.
     return in_facet(x) || ctx_->query->distance(x) <= ctx_->on_surface;
@@ -206,8 +236,9 @@ class VertexStar {
   const ImproveTets* m_ = nullptr;
   const SmoothContext* ctx_ = nullptr;
   std::uint32_t v_ = 0, facet_ = kNoFacet;
-  bool on_surface_ = false;
-  double n_[3] = {0, 0, 0};
+  bool on_surface_ = false, curved_ = false;
+  double n_[3] = {0, 0, 0};   // the facet's unit normal
+  double tn_[3] = {0, 0, 0};  // the tangent plane's unit normal (n_ on a planar fan)
   const double* fp_[3] = {nullptr, nullptr, nullptr};
   std::vector<std::uint32_t> star_, link_;
   std::vector<StarTet> st_;
@@ -222,7 +253,7 @@ bool smooth_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, do
   static thread_local VertexStar vs;
   static thread_local std::vector<std::array<double, 3>> grads, active;
   static thread_local std::vector<double> qs;
-  if (!vs.load(m, v, ctx)) return false;
+  if (!vs.load(m, v, ctx, true)) return false;
   const double* x0 = m.p(v);
   double x[3] = {x0[0], x0[1], x0[2]};
   const double q_start = vs.eval(x);
@@ -276,7 +307,7 @@ bool smooth_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, do
 
 bool relax_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, double floor) {
   static thread_local VertexStar vs;
-  if (!vs.load(m, v, ctx)) return false;
+  if (!vs.load(m, v, ctx, false)) return false;
   const double* x0 = m.p(v);
   double c[3] = {0, 0, 0};
   for (std::uint32_t w : vs.link())

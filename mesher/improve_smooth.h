@@ -2,13 +2,17 @@
 // along the steepest ascent direction of the smallest tet_sine of its star (the min-norm point
 // of the active tets' gradients, Freitag & Ollivier-Gooch), with a halving line search; a move
 // is kept only if the star's smallest quality rises and every tet stays valid. Interior nodes
-// move freely; surface nodes only within the plane of their facet when every boundary face at
-// them lies in that plane: the fan of boundary faces keeps its outer polygon and every face its
-// orientation, so it covers the same part of the surface as before.
+// move freely. Surface nodes (not feature nodes) slide on the surface: within the plane of
+// their facet when every boundary face at them lies in that plane (the fan of boundary faces
+// keeps its outer polygon and every face its orientation, so it covers the same part of the
+// surface as before); else, given a BoundaryContext, along the fan's tangent plane and back
+// onto the closest point of the input surface, each boundary face at them keeping its
+// orientation and lying on the surface within the context's tolerance.
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
 #include <cstdint>
 
+#include "mesher/improve_boundary.h"
 #include "mesher/improve_tets.h"
 #include "mesher/surface_prepare.h"
 #include "mesher/surface_query.h"
@@ -19,6 +23,9 @@ struct SmoothContext {
   const PreparedSurface* surface = nullptr;  ///< null: surface nodes stay fixed
   const SurfaceQuery* query = nullptr;
   double on_surface = 0;       ///< a moved surface node must stay this close to the surface
+  /// Set: surface nodes on curved fans slide on the surface too (smooth_vertex only; the
+  /// relaxation keeps them). Null: only within planar fans.
+  const BoundaryContext* boundary = nullptr;
   int iterations = 4;          ///< ascent steps per call
 };
 

@@ -131,7 +131,7 @@ void ImproveTets::link_face(std::uint32_t t, int i, std::uint32_t ref) {
 
 bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
                           const std::vector<std::uint32_t>& fresh,
-                          std::vector<std::uint32_t>* created) {
+                          std::vector<std::uint32_t>* created, bool boundary_may_change) {
   if (++mark_stamp_ == 0) {
     std::fill(mark_.begin(), mark_.end(), 0);
     mark_stamp_ = 1;
@@ -158,11 +158,24 @@ bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
   std::sort(e.begin(), e.end(), [](const Entry& a, const Entry& b) {
     return a.key != b.key ? a.key < b.key : a.is_new < b.is_new;
   });
-  // Every key exactly twice, at least one of the two new.
-  for (std::size_t x = 0; x < e.size(); x += 2)
-    if (x + 1 >= e.size() || e[x].key != e[x + 1].key || !e[x + 1].is_new ||
-        (x + 2 < e.size() && e[x + 2].key == e[x].key))
-      return false;
+  // Every key exactly twice, at least one of the two new; with boundary_may_change, a key
+  // once: a new face (listed as a pair with itself: it becomes a boundary face), or a
+  // boundary face of the cavity (left out: it goes away).
+  static thread_local std::vector<Entry> pairs;
+  pairs.clear();
+  for (std::size_t x = 0; x < e.size();) {
+    if (x + 1 < e.size() && e[x].key == e[x + 1].key) {
+      if (!e[x + 1].is_new || (x + 2 < e.size() && e[x + 2].key == e[x].key)) return false;
+      pairs.push_back(e[x]);
+      pairs.push_back(e[x + 1]);
+      x += 2;
+      continue;
+    }
+    if (!boundary_may_change || (!e[x].is_new && e[x].src != kImproveNone)) return false;
+    if (e[x].is_new) pairs.push_back(e[x]), pairs.push_back(e[x]);
+    ++x;
+  }
+  e.swap(pairs);
 
   std::vector<std::uint32_t> slot(nn);
   for (std::uint32_t t : old) {
@@ -189,6 +202,7 @@ bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
     const Entry &a = e[x], &b = e[x + 1];  // b is new
     const std::uint32_t tb = slot[b.src >> 2];
     const int ib = int(b.src & 3);
+    if (a.is_new && a.src == b.src) continue;  // a new boundary face: stays kImproveNone
     if (a.is_new) {
       const std::uint32_t ta = slot[a.src >> 2];
       ta_[4 * std::size_t(tb) + ib] = 4 * ta + (a.src & 3);
@@ -263,13 +277,14 @@ void ImproveTets::star(std::uint32_t v, std::vector<std::uint32_t>& out) const {
   }
 }
 
-bool ImproveTets::edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b,
-                            std::vector<std::uint32_t>& ring,
-                            std::vector<std::uint32_t>& tets) const {
-  ring.clear();
-  tets.clear();
-  const std::uint32_t* v = &tv_[4 * std::size_t(t)];
+namespace {
+
+/// The two vertices of tet v other than a and b, in the order (c, d) for which (a, b, c, d)
+/// has the tet's orientation. False if a or b is not a vertex of v.
+bool other_two(const std::uint32_t* v, std::uint32_t a, std::uint32_t b, std::uint32_t& c,
+               std::uint32_t& d) {
   const int ia = index_in(v, a), ib = index_in(v, b);
+  if (ia < 0 || ib < 0) return false;
   int o[2], k = 0;
   for (int i = 0; i < 4; ++i)
     if (i != ia && i != ib) o[k++] = i;
@@ -278,8 +293,20 @@ bool ImproveTets::edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b,
   int inv = 0;
   for (int i = 0; i < 4; ++i)
     for (int j = i + 1; j < 4; ++j) inv += perm[i] > perm[j];
-  std::uint32_t c = v[o[0]], d = v[o[1]];
+  c = v[o[0]], d = v[o[1]];
   if (inv & 1) std::swap(c, d);
+  return true;
+}
+
+}  // namespace
+
+bool ImproveTets::edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b,
+                            std::vector<std::uint32_t>& ring,
+                            std::vector<std::uint32_t>& tets) const {
+  ring.clear();
+  tets.clear();
+  std::uint32_t c, d;
+  if (!other_two(&tv_[4 * std::size_t(t)], a, b, c, d)) return false;
   std::uint32_t cur = t;
   for (int guard = 0; guard < 256; ++guard) {
     ring.push_back(c);
@@ -295,6 +322,44 @@ bool ImproveTets::edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b,
     if (cur == t) return true;
   }
   return false;
+}
+
+bool ImproveTets::open_edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b, int max_ring,
+                                 std::vector<std::uint32_t>& ring,
+                                 std::vector<std::uint32_t>& tets) const {
+  ring.clear();
+  tets.clear();
+  std::uint32_t c, d;
+  if (!other_two(&tv_[4 * std::size_t(t)], a, b, c, d)) return false;
+  // Backwards (across the face (a, b, c), opposite d) to the tet with the first boundary face.
+  std::uint32_t cur = t;
+  for (int guard = 0;; ++guard) {
+    if (guard > max_ring) return false;
+    const std::uint32_t r = ta_[4 * std::size_t(cur) + index_in(&tv_[4 * std::size_t(cur)], d)];
+    if (r == kImproveNone) break;
+    const std::uint32_t nt = r >> 2;
+    if (nt == t) return false;  // closed ring
+    const std::uint32_t e = tv_[4 * std::size_t(nt) + (r & 3)];
+    cur = nt;
+    d = c;
+    c = e;
+  }
+  // Forwards (across (a, b, d), opposite c) to the other boundary face.
+  for (int guard = 0;; ++guard) {
+    if (guard >= max_ring) return false;
+    ring.push_back(c);
+    tets.push_back(cur);
+    const std::uint32_t r = ta_[4 * std::size_t(cur) + index_in(&tv_[4 * std::size_t(cur)], c)];
+    if (r == kImproveNone) {
+      ring.push_back(d);
+      return true;
+    }
+    const std::uint32_t nt = r >> 2;
+    const std::uint32_t e = tv_[4 * std::size_t(nt) + (r & 3)];
+    cur = nt;
+    c = d;
+    d = e;
+  }
 }
 
 std::size_t ImproveTets::write_back(VolumeMesh& mesh) const {

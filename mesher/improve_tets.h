@@ -45,10 +45,12 @@ class ImproveTets {
   /// Replaces the tets `old` (a connected cavity) by `fresh` (4 vertex ids per tet, positively
   /// oriented, filling the same region), all of region `region`. Faces are matched by vertex
   /// set: every face of a new tet must be either a face of another new tet or a face of the
-  /// cavity's outer boundary. Returns false (and changes nothing) if the faces do not match.
-  /// New tet ids are written to *created (if given).
+  /// cavity's outer boundary. With `boundary_may_change`, a boundary face of the cavity may
+  /// also go unmatched (it is no longer a face) and so may a new face (it becomes a boundary
+  /// face): the caller has checked the new boundary. Returns false (and changes nothing) if
+  /// the faces do not match. New tet ids are written to *created (if given).
   bool replace(const std::vector<std::uint32_t>& old, const std::vector<std::uint32_t>& fresh,
-               std::vector<std::uint32_t>* created = nullptr);
+               std::vector<std::uint32_t>* created = nullptr, bool boundary_may_change = false);
 
   /// Appends an interior node at p (target size h) to the node set and returns its id; it is
   /// in no tet until a replace() uses it.
@@ -68,6 +70,12 @@ class ImproveTets {
   /// Returns false if the edge is on the boundary (the ring is open).
   bool edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b,
                  std::vector<std::uint32_t>& ring, std::vector<std::uint32_t>& tets) const;
+  /// The open ring of a boundary edge (a, b) found from tet t (which must contain a and b):
+  /// ring vertices r_0..r_m and m tets such that tet k is (a, b, r_k, r_{k+1}) positively
+  /// oriented, (a, b, r_0) and (a, b, r_m) the two boundary faces at the edge. Returns false
+  /// if the edge is not on the boundary (the ring closes) or its ring is longer than max_ring.
+  bool open_edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b, int max_ring,
+                      std::vector<std::uint32_t>& ring, std::vector<std::uint32_t>& tets) const;
 
   /// The solid's surface, when set: a tet the pass creates (or changes by moving a vertex) with
   /// at least two vertices on the surface must have its centroid strictly inside the solid

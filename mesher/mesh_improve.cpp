@@ -58,7 +58,7 @@ ImproveStage measure(const ImproveTets& m, const std::string& name) {
 }
 
 struct Counters {
-  std::size_t edge_removals = 0, face_removals = 0;
+  std::size_t edge_removals = 0, face_removals = 0, boundary_flips = 0;
 };
 
 /// tet_sine of every tet slot (+inf for dead slots), kept up to date by the passes so that a
@@ -96,10 +96,11 @@ class SineCache {
   std::vector<double> q_;
 };
 
-/// Flips until no tet below `threshold` has an improving edge or face removal. Tets are
-/// taken worst first (ties by id); each takes the best of its candidates.
+/// Flips until no tet below `threshold` has an improving edge or face removal (or, given
+/// `boundary`, boundary edge removal). Tets are taken worst first (ties by id); each takes the
+/// best of its candidates.
 std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring,
-                      Counters& c) {
+                      Counters& c, const BoundaryContext* boundary = nullptr) {
   using Entry = std::tuple<double, std::uint32_t, std::uint32_t>;  // quality, tet, version
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
   for (std::uint32_t t = 0; t < m.capacity(); ++t)
@@ -114,7 +115,7 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
     if (!m.alive(t) || m.version(t) != ver) continue;
     best.q_new = -1;
     best.q_old = 0;
-    bool have = false, best_is_edge = false;
+    bool have = false, best_is_edge = false, best_is_boundary = false;
     const std::uint32_t* v = m.v(t);
     // Validity (exact orientation, inside tests) is checked last, only for a candidate that
     // would become the best: the same choice as checking every candidate, for less work.
@@ -133,10 +134,19 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
         have = true;
         best_is_edge = false;
       }
+    if (boundary)
+      for (const auto& e : kEdge)
+        if (boundary_edge_removal(m, t, v[e[0]], v[e[1]], max_ring, *boundary, cand,
+                                  have ? best.q_new : -1, sines) &&
+            cand.improves() && (!have || cand.q_new > best.q_new)) {
+          std::swap(best, cand);
+          have = best_is_boundary = true;
+          best_is_edge = false;
+        }
     if (!have) continue;
-    if (!m.replace(best.old, best.fresh, &created)) continue;
+    if (!m.replace(best.old, best.fresh, &created, best_is_boundary)) continue;
     ++ops;
-    ++(best_is_edge ? c.edge_removals : c.face_removals);
+    ++(best_is_boundary ? c.boundary_flips : best_is_edge ? c.edge_removals : c.face_removals);
     for (std::uint32_t o : best.old) cache.refresh(o);
     for (std::uint32_t n : created) {
       const double qn = cache.refresh(n);
@@ -248,7 +258,7 @@ std::vector<std::uint32_t> relax_pass(ImproveTets& m, double below, double floor
 
 /// Takes out every boundary cap below `threshold` (worst first, ties by id); a tet that a
 /// removal leaves with two boundary faces is tried too. Returns how many were removed.
-std::size_t cap_pass(ImproveTets& m, SineCache& cache, double threshold, const CapContext& ctx) {
+std::size_t cap_pass(ImproveTets& m, SineCache& cache, double threshold, const BoundaryContext& ctx) {
   using Entry = std::tuple<double, std::uint32_t, std::uint32_t>;  // quality, tet, version
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
   for (std::uint32_t t = 0; t < m.capacity(); ++t)
@@ -327,17 +337,11 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
   for (int k = 0; k < 3; ++k)
     diag += (surface.bbox_max[k] - surface.bbox_min[k]) * (surface.bbox_max[k] - surface.bbox_min[k]);
   diag = std::sqrt(diag);
-  SmoothContext ctx;
-  if (options.smooth_surface) {
-    ctx.surface = &surface;
-    ctx.query = &query;
-  }
-  ctx.on_surface = 1e-11 * diag;
   const double threshold = deg_to_sine(options.work_angle);
   const double smooth_threshold = deg_to_sine(options.smooth_angle);
   Counters c;
   SineCache cache(m, options.threads);
-  CapContext caps;
+  BoundaryContext caps;
   caps.surface = &surface;
   caps.query = &query;
   caps.sizing = &sizing;
@@ -347,14 +351,22 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
     features = detect_sharp_edges(surface.mesh, options.feature_angle);
     caps.features = &features;
   }
+  SmoothContext ctx;
+  if (options.smooth_surface) {
+    ctx.surface = &surface;
+    ctx.query = &query;
+    if (options.slide_curved) ctx.boundary = &caps;
+  }
+  ctx.on_surface = 1e-11 * diag;
+  const BoundaryContext* flip_boundary = options.flip_boundary ? &caps : nullptr;
   const double cap_threshold = options.cap_angle > 0 ? deg_to_sine(options.cap_angle) : -1;
   for (int r = 0; r < options.rounds; ++r) {
     const std::string n = std::to_string(r + 1);
-    std::size_t ops = flip_pass(m, cache, threshold, options.max_ring, c);
+    std::size_t ops = flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
     if (cap_threshold > 0) {
       const std::size_t removed = cap_pass(m, cache, cap_threshold, caps);
       st.caps_removed += removed;
-      if (removed) ops += removed + flip_pass(m, cache, threshold, options.max_ring, c);
+      if (removed) ops += removed + flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
     }
     if (options.split_angle > 0) {
       const std::size_t split = split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring);
@@ -390,11 +402,12 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
       st.splits += split;
       ops += split;
     }
-    if (ops) ops += flip_pass(m, cache, threshold, options.max_ring, c);
+    if (ops) ops += flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
     stage("final", ops);
   }
   st.edge_removals = c.edge_removals;
   st.face_removals = c.face_removals;
+  st.boundary_flips = c.boundary_flips;
   st.boundary_changes = m.write_back(mesh);
   st.seconds = total.seconds();
   return st;

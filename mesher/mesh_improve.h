@@ -25,6 +25,12 @@ struct ImproveOptions {
   double relax_below = 0.7;       ///< ... of tets whose radius ratio is below this
   int max_ring = 10;              ///< largest edge ring tried by edge removal
   bool smooth_surface = true;     ///< move surface nodes within planar patches
+  /// ... and on curved parts of the surface too: the smoothing slides them on the input
+  /// surface, each boundary face at them staying within hausdorff_tolerance (as for caps).
+  bool slide_curved = true;
+  /// Flip boundary edges within the surface where that improves the worst tet
+  /// (boundary_edge_removal, mesher/improve_flips.h; new faces within hausdorff_tolerance).
+  bool flip_boundary = true;
   /// Take boundary caps (flat tets with two boundary faces, mesher/improve_caps.h) below this
   /// angle out of the domain; 0 = never (the boundary face list then stays unchanged).
   double cap_angle = 15;
@@ -62,6 +68,7 @@ struct ImproveStats {
   /// the quality figures only with measure_stages.
   std::vector<ImproveStage> stages;
   std::size_t edge_removals = 0, face_removals = 0, smoothed = 0, relaxed = 0;
+  std::size_t boundary_flips = 0;    ///< boundary edges flipped within the surface
   std::size_t caps_removed = 0;      ///< boundary caps taken out of the domain
   std::size_t splits = 0;            ///< sliver edges split (interior nodes added)
   std::size_t boundary_changes = 0;  ///< boundary faces replaced (0: the boundary list is unchanged)
@@ -69,8 +76,9 @@ struct ImproveStats {
 };
 
 /// Improves `mesh` in place. Every tet stays exactly positively oriented and not flat; the
-/// boundary faces stay on the surface (boundary nodes move only within planar patches of the
-/// surface, feature nodes never; the boundary face list changes only where a cap is taken
+/// boundary faces stay on the surface (surface nodes slide on the input surface, within planar
+/// patches or within the tolerance on curved ones, feature nodes never move; the boundary face
+/// list changes only where a cap is taken
 /// out, and then within the tolerance of the local size `sizing` gives; boundary_tet is
 /// recomputed); regions are kept; nodes are added only by sliver splits; the result depends only on the input and
 /// the options (not on the thread count: the pass makes no random choice). Throws UsageError

@@ -331,4 +331,9 @@ double SurfaceQuery::distance(const double* p) const {
   return std::sqrt(impl_->tree.squared_distance(q));
 }
 
+double SurfaceQuery::distance(const double* p, const double* hint) const {
+  const K::Point_3 q(p[0], p[1], p[2]), h(hint[0], hint[1], hint[2]);
+  return std::sqrt(impl_->tree.squared_distance(q, h));
+}
+
 }  // namespace kdmesh

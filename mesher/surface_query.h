@@ -24,6 +24,10 @@ class SurfaceQuery {
   double closest(const double* p, double* out, std::uint32_t* facet = nullptr) const;
   /// Distance from p to the surface.
   double distance(const double* p) const;
+  /// The same, faster, given `hint`: a point on the surface near p (e.g. a mesh vertex on it)
+  /// that bounds the search. The result is min(|p - hint|, the distance), so it may be low by
+  /// at most hint's own distance from the surface.
+  double distance(const double* p, const double* hint) const;
   /// Distance from `origin` along the ray in direction `dir` (not necessarily unit) to its
   /// first crossing with a facet other than `skip` (kNoFacet: none skipped), in units of
   /// |dir|; +infinity when the ray meets no other facet. The facet hit goes to *hit (if not

@@ -201,6 +201,56 @@ TEST(ImproveTets, RemovingATetMayOrphanOnlyTheVertexAllowed) {
   EXPECT_EQ(star, std::vector<std::uint32_t>{1});
 }
 
+// A boundary edge's open ring, and splitting the edge through a new node (the boundary-edge
+// split of the quality pass, mesher/improve_split.h): two tets (a, b, c, p) and (a, b, p, d)
+// around the edge ab, whose boundary faces at ab are (a, b, c) and (a, b, d). A replace that
+// drops those two faces and creates four new ones is refused unless the boundary may change.
+TEST(ImproveTets, OpenEdgeRingAndABoundaryChangingReplace) {
+  NodeSet n = interior_nodes({{0, 0, 0}, {2, 0, 0}, {1, -1, 0}, {1, 1, 0}, {1, 0, 1}, {1, 0, 0}});
+  const std::uint32_t a = 0, b = 1, c = 2, d = 3, p = 4, x = 5;
+  std::vector<std::uint32_t> tets = positive(n, a, b, c, p);
+  const auto t2 = positive(n, a, b, p, d);
+  tets.insert(tets.end(), t2.begin(), t2.end());
+  ImproveTets m(n, tets, {0, 0});
+  std::vector<std::uint32_t> ring, rtets;
+  ASSERT_TRUE(m.open_edge_ring(0, a, b, 10, ring, rtets));
+  ASSERT_EQ(ring.size(), 3u);
+  ASSERT_EQ(rtets.size(), 2u);
+  EXPECT_EQ(ring[1], p);  // the ends are c and d, in the order the orientation gives
+  EXPECT_EQ((std::set<std::uint32_t>{ring[0], ring[2]}), (std::set<std::uint32_t>{c, d}));
+  for (std::size_t k = 0; k < 2; ++k) {  // tet k is (a, b, r_k, r_k+1), positively oriented
+    EXPECT_EQ(tet_sets({a, b, ring[k], ring[k + 1]}), tet_sets({m.v(rtets[k]), m.v(rtets[k]) + 4}));
+    EXPECT_GT(pred::orient3d(m.p(a), m.p(b), m.p(ring[k]), m.p(ring[k + 1])), 0);
+  }
+  // From the other tet: the same ring.
+  std::vector<std::uint32_t> ring2, rtets2;
+  ASSERT_TRUE(m.open_edge_ring(1, a, b, 10, ring2, rtets2));
+  EXPECT_EQ(ring2, ring);
+  EXPECT_FALSE(m.open_edge_ring(0, a, b, 1, ring2, rtets2));  // longer than max_ring
+  // Split ab at x (its midpoint).
+  std::vector<std::uint32_t> fresh;
+  for (std::size_t k = 0; k < 2; ++k)
+    fresh.insert(fresh.end(), {a, x, ring[k], ring[k + 1], x, b, ring[k], ring[k + 1]});
+  EXPECT_FALSE(m.replace(rtets, fresh));
+  EXPECT_EQ(m.live(), 2u);
+  std::vector<std::uint32_t> created;
+  ASSERT_TRUE(m.replace(rtets, fresh, &created, true));
+  EXPECT_EQ(m.live(), 4u);
+  expect_consistent(m);
+  // The four tets' 16 face sides: 4 inner faces (x c p, x p d, a x p, x b p), each seen from
+  // both sides, and 8 boundary faces (the 6 kept, and a x c, x b c, a x d, x b d for the two
+  // that went away).
+  std::size_t boundary = 0, inner = 0;
+  for (std::uint32_t t : created)
+    for (int i = 0; i < 4; ++i) (m.adj(t, i) == kImproveNone ? boundary : inner) += 1;
+  EXPECT_EQ(inner, 2u * 4);
+  EXPECT_EQ(boundary, 8u);
+  // A face of the cavity that is not a boundary face may never go unmatched: removing one
+  // tet this way (its faces with the others would vanish) is refused.
+  EXPECT_FALSE(m.replace({created[0]}, {}, nullptr, true));
+  EXPECT_EQ(m.live(), 4u);
+}
+
 // When pq misses the face (q moved beyond edge bc), a new tet would be inverted: no flip.
 TEST(ImproveFlips, FaceRemovalRefusesWhenTheNewEdgeMissesTheFace) {
   NodeSet n = interior_nodes({{0, 0, 0}, {3, 0, 0}, {0, 3, 0}, {1, 1, 1}, {4, 4, -1}});
@@ -501,7 +551,8 @@ TEST(MeshImprove, GradedCubeKeepsEveryInvariantAndRaisesTheWorstAngle) {
   ASSERT_LT(q0.min_dihedral, 5.0);  // the Delaunay mesh has slivers to remove
   ImproveOptions o;
   o.cap_angle = 0;    // no boundary change and no new node: the pass's invariants alone
-  o.split_angle = 0;  // (caps and splits: MeshImprove.CapsAndSplitsOnACurvedSurface)
+  o.split_angle = 0;  // (caps, splits and boundary flips: RealPartFailureClasses in
+  o.flip_boundary = false;  // test_auto_sizing.cpp)
   std::vector<double> fractions;
   o.progress = [&](const std::string& stage, double f) {
     EXPECT_EQ(stage, "improve");
@@ -592,7 +643,9 @@ TEST(MeshImprove, TwoBodiesKeepTheirRegions) {
   Piped p = pipeline({{0, 0, 0, 1, 1, 1}, {2, 0, 0, 3, 1, 0.5}}, 0.2);
   ASSERT_EQ(p.surface.num_bodies, 2u);
   const auto bset = boundary_set(p.mesh);
-  improve_mesh(p.mesh, p.surface, *p.query, p.sizing);
+  ImproveOptions o;
+  o.flip_boundary = false;  // the boundary face set stays as it is
+  improve_mesh(p.mesh, p.surface, *p.query, p.sizing, o);
   const VolumeMesh& vm = p.mesh;
   const MeshCheck c = check_volume_mesh(vm, p.surface, *p.query, p.sizing);
   EXPECT_TRUE(c.ok()) << failures(c);

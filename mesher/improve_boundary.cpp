@@ -1,0 +1,78 @@
+// kdmesh — boundary constraints of the quality-improvement pass (mesher/improve_boundary.h).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/improve_boundary.h"
+
+#include <algorithm>
+#include <vector>
+
+#include "mesher/improve_quality.h"
+
+namespace kdmesh {
+
+namespace {
+
+double segment_distance2(const double* x, const double* a, const double* b) {
+  const double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double w[3] = {x[0] - a[0], x[1] - a[1], x[2] - a[2]};
+  const double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+  const double t = dd > 0 ? std::clamp((w[0] * d[0] + w[1] * d[1] + w[2] * d[2]) / dd, 0.0, 1.0) : 0.0;
+  double r = 0;
+  for (int k = 0; k < 3; ++k) r += (w[k] - t * d[k]) * (w[k] - t * d[k]);
+  return r;
+}
+
+}  // namespace
+
+bool face_on_surface(const double* a, const double* b, const double* c, const BoundaryContext& ctx) {
+  static constexpr double kBary[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0.5, 0}, {0, 0.5, 0.5},
+                                         {0.5, 0, 0.5}, {2.0 / 3, 1.0 / 6, 1.0 / 6},
+                                         {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
+  double cen[3];
+  for (int q = 0; q < 3; ++q) cen[q] = (a[q] + b[q] + c[q]) / 3;
+  const double limit = ctx.max_distance * (*ctx.sizing)(cen);
+  const double* corner[3] = {a, b, c};  // on the surface: each bounds its samples' search
+  for (const auto& w : kBary) {
+    double s[3];
+    for (int q = 0; q < 3; ++q) s[q] = w[0] * a[q] + w[1] * b[q] + w[2] * c[q];
+    const int near = int(std::max_element(w, w + 3) - w);
+    if (!(ctx.query->distance(s, corner[near]) <= limit)) return false;
+  }
+  double cp[3];
+  std::uint32_t facet = kNoFacet;
+  ctx.query->closest(cen, cp, &facet);
+  if (facet == kNoFacet) return false;
+  const SurfaceMesh& sm = ctx.surface->mesh;
+  const std::uint32_t* ft = sm.tri(facet);
+  double n[3], fn[3];
+  tri_normal(a, b, c, n);
+  tri_normal(sm.points.p(ft[0]), sm.points.p(ft[1]), sm.points.p(ft[2]), fn);
+  return n[0] * fn[0] + n[1] * fn[1] + n[2] * fn[2] > 0;
+}
+
+bool along_feature(const double* a, const double* b, const BoundaryContext& ctx) {
+  if (!ctx.features) return true;
+  const double m[3] = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+  double cp[3];
+  std::uint32_t facet = kNoFacet;
+  ctx.query->closest(m, cp, &facet);
+  if (facet == kNoFacet) return true;
+  const SurfaceMesh& sm = ctx.surface->mesh;
+  const std::vector<std::uint32_t>& fe = ctx.features->edges;  // (lo, hi) pairs, sorted
+  const double len2 = (b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) + (b[2] - a[2]) * (b[2] - a[2]);
+  for (int j = 0; j < 3; ++j) {
+    std::uint32_t p = sm.tri(facet)[j], q = sm.tri(facet)[(j + 1) % 3];
+    if (p > q) std::swap(p, q);
+    std::size_t lo = 0, hi = fe.size() / 2;  // binary search over the pairs
+    while (lo < hi) {
+      const std::size_t mid = (lo + hi) / 2;
+      if (fe[2 * mid] < p || (fe[2 * mid] == p && fe[2 * mid + 1] < q)) lo = mid + 1;
+      else hi = mid;
+    }
+    if (lo < fe.size() / 2 && fe[2 * lo] == p && fe[2 * lo + 1] == q &&
+        segment_distance2(m, sm.points.p(p), sm.points.p(q)) <= 0.0025 * len2)
+      return true;
+  }
+  return false;
+}
+
+}  // namespace kdmesh
