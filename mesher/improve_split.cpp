@@ -49,9 +49,9 @@ bool split_sliver(ImproveTets& m, std::uint32_t t, int max_ring, std::uint32_t* 
     }
     // Tet k of the ring is (a, b, r_k, r_k+1); its halves are (a, x, r_k, r_k+1) and
     // (x, b, r_k, r_k+1). x: the midpoint of ab moved off the sliver's plane, where the worst
-    // half is best; every half valid (exact orientation, not flat) and, with two or more
-    // surface vertices, centroid inside (inside_ok counts surface vertices by id: standing in
-    // a or b for the interior node can only ask for that test more often).
+    // half is best; every half valid (exact orientation, not flat) and, with a surface
+    // vertex, centroid inside (inside_ok counts surface vertices by id: standing in a or b
+    // for the interior node can only ask for that test more often).
     const double L = std::sqrt(len2);
     double best_x[3] = {0, 0, 0}, best_q = worst_old;
     for (double s : {0.0, 0.1, -0.1, 0.2, -0.2, 0.3, -0.3, 0.4, -0.4}) {

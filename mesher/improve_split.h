@@ -15,7 +15,7 @@ namespace kdmesh {
 /// midpoint or moved off t's plane by up to 0.4 x the edge's length, wherever the worst new
 /// tet is best. Refused (false, nothing changed) when every edge of t is on the boundary, the
 /// ring is larger than max_ring, or no position gives valid tets (exactly positive, not flat,
-/// and with two or more surface vertices the centroid strictly inside the solid,
+/// and with a surface vertex the centroid strictly inside the solid,
 /// ImproveTets::inside_ok) whose worst is better than the ring's worst before. The new node's id goes to
 /// *node and the new tets to *created (if not null).
 bool split_sliver(ImproveTets& m, std::uint32_t t, int max_ring, std::uint32_t* node = nullptr,

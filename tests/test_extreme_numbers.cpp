@@ -102,7 +102,7 @@ TEST(ExtremeNumbers, ReproducersGiveClearErrorsNotTraps) {
     std::string says;
   };
   const std::vector<Case> cases = {
-      {"mesh " + kBlock + " --size 1e40", 2, "size (--size) 1e+40 is more than"},
+      {"mesh " + kBlock + " --size 1e40", 2, "size (--size) 1e+40 is above"},
       {"mesh " + kBlock + " --scale 1e40 --size 3e40", 3, "exceed " + num(kdmesh::kMaxLength)},
       {"mesh " + kBlock + " --scale 1e-90 --size 3e-90", 3, "below " + num(kdmesh::kMinLength)},
       {"compare-tetgen " + kBlock + " --size 1e50", 2, "size (--size) 1e+50"},
@@ -285,6 +285,35 @@ TEST(ExtremeNumbers, LargeScaleKeepsCornerNodes) {
       EXPECT_EQ(r.summary["counts"]["nodes_by_kind"]["corner"], 8) << what;
       EXPECT_NEAR(r.summary["mesh_check"]["mesh_volume"].get<double>() / (s * s * s), 1.0, 1e-9) << what;
     }
+}
+
+// A size above the model's extent was refused beyond 1e3 times the extent, a bound that was
+// chosen, not derived (issue 19). No element can be larger than the model: any size above the
+// extent (the bounding-box diagonal) is the extent, with a notice, up to kMaxLength. So the
+// same nodes and counts at 1.5 x, 1e6 x the extent and at 2^120 as at the extent itself.
+TEST(ExtremeNumbers, SizeAboveTheExtentIsTheExtent) {
+  const Extent e = extent_of(kBlock);
+  auto run = [&](double size, const std::string& name) {
+    kdmesh::MeshJob job;
+    job.name = name;
+    job.input = kBlock;
+    job.sizing.max_size = size;
+    job.sizing.min_size = size / 1000;  // the default
+    job.nodes = (tmpdir() / ("above-" + name + ".xyz")).string();
+    const kdmesh::MeshJobResult r = kdmesh::run_mesh_job(job);
+    EXPECT_TRUE(r.ok()) << name << ": " << r.summary.dump().substr(0, 1000);
+    return std::make_pair(r.summary, read_xyz(job.nodes));
+  };
+  const auto [at, at_nodes] = run(e.diagonal, "extent");
+  ASSERT_GT(at_nodes.size(), 3u * 8);
+  for (const double size : {1.5 * e.diagonal, 1e6 * e.diagonal, kdmesh::kMaxLength}) {
+    const auto [summary, nodes] = run(size, "x" + num(size / e.diagonal));
+    EXPECT_EQ(summary["counts"], at["counts"]) << size;
+    EXPECT_EQ(nodes, at_nodes) << size;
+    bool noticed = false;
+    for (const auto& n : summary["notices"]) noticed = noticed || contains(n.get<std::string>(), "meshed at size");
+    EXPECT_TRUE(noticed) << summary["notices"].dump();
+  }
 }
 
 // Scale invariance, exactly: the block scaled by 2^k (sizes with it) gives the same mesh with

@@ -544,6 +544,31 @@ TEST(ImproveTets, InsideOkMovedAgreesWithTheFullTest) {
   EXPECT_GT(rejected, 10);  // some moves leave the solid
 }
 
+// femur.ply at diag/40 failed its mesh check (exit 5) once surface nodes slid on curved
+// surfaces: a tet of one surface and three interior vertices had its centroid outside the
+// solid, and the inside rule asked only tets with two or more surface vertices. A tet with
+// one surface vertex is asked too; with none it is not (its vertices are all inside).
+TEST(ImproveTets, RegressionFemurTetWithOneSurfaceVertexOutside) {
+  Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.5);
+  NodeSet n;
+  // A surface node on the face x = 1 and three nodes labelled interior beyond it: the tet's
+  // centroid (x = 1.15) is outside the cube.
+  const double pts[5][3] = {{1, 0.5, 0.5}, {1.2, 0.4, 0.4}, {1.2, 0.6, 0.4}, {1.2, 0.5, 0.6}, {0.5, 0.5, 0.5}};
+  n.push_back(pts[0], NodeKind::surface, 0, 1.0f);
+  for (int i = 1; i < 5; ++i) n.push_back(pts[i], NodeKind::interior, kNoFacet, 1.0f);
+  const std::vector<std::uint32_t> tet = positive(n, 0, 1, 2, 3);
+  ImproveTets m(n, tet, {0});
+  m.inside_query = p.query.get();
+  const double* q[4] = {m.p(tet[0]), m.p(tet[1]), m.p(tet[2]), m.p(tet[3])};
+  EXPECT_FALSE(m.inside_ok(tet.data(), q));
+  const int iv = index_in(m.v(0), 1);
+  const double x[3] = {1.25, 0.4, 0.4};  // a move that keeps it outside
+  EXPECT_FALSE(m.inside_ok_moved(0, iv, x));
+  // The same tet with no surface vertex is not asked (interior nodes lie inside the solid).
+  n.kind[0] = NodeKind::interior;
+  EXPECT_TRUE(m.inside_ok(tet.data(), q));
+}
+
 TEST(MeshImprove, GradedCubeKeepsEveryInvariantAndRaisesTheWorstAngle) {
   Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.15, 0.0);
   const VolumeMesh before = p.mesh;

@@ -559,6 +559,7 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
   sec["query"] = clock.seconds();
 
   SizingOptions sizing_options = job.sizing;
+  sizing_options.max_size = ranges.size;
   sizing_options.min_size = ranges.min_size;
   sizing_options.curvature_angle_deg = job.curvature_angle;
   sizing_options.chordal_deviation = terms.chordal_deviation;
@@ -567,7 +568,7 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
     clock.reset();
     ThicknessOptions to;
     to.layers = job.thickness_layers;
-    to.max_size = job.sizing.max_size;
+    to.max_size = ranges.size;
     const ThicknessStats ts = add_thickness_sizes(surface, query, to, sizing_options.derived);
     sec["thickness"] = clock.seconds();
     j["thickness"] = {{"walls", ts.walls}, {"gaps", ts.gaps}, {"min_wall", ts.min_wall}, {"min_gap", ts.min_gap}};

@@ -51,7 +51,7 @@ void check_option_ranges(const MeshJob& job) {
 ModelRanges check_model_ranges(const MeshJob& job, const SurfaceMesh& raw) {
   const double size = job.sizing.max_size;
   const bool given = job.sizing.min_size > 0 && job.sizing.min_size != size / 1000;  // not the default
-  ModelRanges out{given ? job.sizing.min_size : size / 1000, {}};
+  ModelRanges out{size, given ? job.sizing.min_size : size / 1000, {}};
   if (raw.points.size() == 0) return out;  // prepare_surface reports empty models
   double lo[3], hi[3], magnitude = 0;
   for (int k = 0; k < 3; ++k) lo[k] = hi[k] = raw.points.p(0)[k];
@@ -85,13 +85,17 @@ ModelRanges check_model_ranges(const MeshJob& job, const SurfaceMesh& raw) {
                          " are more than " + num(kMaxMagnitudePerExtent) + " = 2^21 times its extent (bounding-box diagonal) " +
                          num(extent) + ", and the rounding of points on its surface would exceed the mesh check's tolerance " +
                          "(1e-9 x the extent); move the model towards the origin");
-  if (size > kMaxSizePerExtent * extent && extent > 0)
-    throw UsageError("job '" + job.name + "': size (--size) " + num(size) + " is more than " + num(kMaxSizePerExtent) +
-                     " times the model's extent " + num(extent) + scaled + "; a size of " + num(extent) +
-                     " already gives the coarsest mesh");
   if (size > kMaxLength)
     throw UsageError("job '" + job.name + "': size (--size) " + num(size) + " is above " + num(kMaxLength) +
                      " = 2^120, the largest length the mesher computes with exactly and finitely");
+  if (size > extent && extent > 0) {
+    // No element is larger than the model: the size is the extent (and so is the default
+    // min_size's base), whatever larger number was asked for.
+    out.size = extent;
+    if (!given) out.min_size = extent / 1000;
+    out.note = "size " + num(size) + " is more than the model's extent (bounding-box diagonal) " + num(extent) +
+               scaled + "; meshed at size " + num(extent) + ", the coarsest";
+  }
   const double relative = kMinSizePerExtent * extent;
   const double floor = std::max(kMinLength, relative);
   const std::string why = relative >= kMinLength
@@ -106,6 +110,7 @@ ModelRanges check_model_ranges(const MeshJob& job, const SurfaceMesh& raw) {
     out.note = "min_size raised from " + num(out.min_size) + " (size / 1000) to " + num(floor) + why;
     out.min_size = floor;
   }
+  if (given && out.min_size > out.size) out.min_size = out.size;
   return out;
 }
 

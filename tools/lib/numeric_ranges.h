@@ -61,10 +61,6 @@ static_assert(kMaxMagnitudePerExtent * 0x1p-51 <= kOnSurfaceDistance);
 /// derived, and let such jobs through (exit 4 after 18 s instead of a usage error).
 constexpr double kMinSizePerExtent = 0x1p-22;
 static_assert(kMinSizePerExtent * 0.7 / (12 * 8) >= kOnSurfaceDistance);
-/// Largest size relative to the model's extent. A size of the extent already gives the
-/// coarsest mesh; beyond 1e3 times it, size * extent-scale products (densities, distances
-/// to far-away sample points, the interior fill's steps) leave the range above.
-constexpr double kMaxSizePerExtent = 1e3;
 /// Largest gradation. Two bounds meet here. What a mesh can honour: at gradation g, the size
 /// one element length s away from a zone of size s is (1 + g) s, so above 2 neighbouring
 /// elements would differ by more than 3x, which no tetrahedral mesh of bounded quality gives.
@@ -81,14 +77,18 @@ void check_option_ranges(const MeshJob& job);
 
 /// Checks the model once read, after scaling (before it is prepared): every coordinate times
 /// job.scale within kMaxLength, the extent at least kMinLength, the coordinates within
-/// kMaxMagnitudePerExtent times the extent, size within kMaxSizePerExtent times the extent and
-/// kMaxLength, and a given min_size at least kMinLength and kMinSizePerExtent times the extent.
+/// kMaxMagnitudePerExtent times the extent, size within kMaxLength, and a given min_size at
+/// least kMinLength and kMinSizePerExtent times the extent. A size above the extent (the
+/// bounding-box diagonal) is the extent: no element can be larger than the model, so the
+/// job is meshed at the extent, the coarsest, with a note (this replaced a refusal above 1e3
+/// times the extent, a bound that had been chosen, not derived: issue 19).
 /// InputError (exit 3) naming the file for coordinates, UsageError (exit 2) naming the option
 /// for sizes. The default min_size (size / 1000, also when a batch job sets no min_size) is
 /// not the user's number: below that floor it is raised to it, with a note.
 struct ModelRanges {
+  double size = 0;      ///< the size to mesh with (the job's, at most the extent)
   double min_size = 0;  ///< the min_size to mesh with
-  std::string note;     ///< a notice when the default min_size was raised, else empty
+  std::string note;     ///< a notice when the size was lowered or the default min_size raised, else empty
 };
 ModelRanges check_model_ranges(const MeshJob& job, const SurfaceMesh& raw);
 
