@@ -311,17 +311,19 @@ bool ImproveTets::edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b,
   for (int guard = 0; guard < 256; ++guard) {
     ring.push_back(c);
     tets.push_back(cur);
-    const std::uint32_t* cv = &tv_[4 * std::size_t(cur)];
-    const std::uint32_t r = ta_[4 * std::size_t(cur) + index_in(cv, c)];
-    if (r == kImproveNone) return false;
-    const std::uint32_t nt = r >> 2;
-    const std::uint32_t e = tv_[4 * std::size_t(nt) + (r & 3)];
-    cur = nt;
-    c = d;
-    d = e;
+    if (!turn(cur, c, d)) return false;
     if (cur == t) return true;
   }
   return false;
+}
+
+bool ImproveTets::turn(std::uint32_t& cur, std::uint32_t& c, std::uint32_t& d) const {
+  const std::uint32_t r = ta_[4 * std::size_t(cur) + index_in(&tv_[4 * std::size_t(cur)], c)];
+  if (r == kImproveNone) return false;
+  cur = r >> 2;
+  c = d;
+  d = tv_[4 * std::size_t(cur) + (r & 3)];
+  return true;
 }
 
 bool ImproveTets::open_edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b, int max_ring,
@@ -335,30 +337,18 @@ bool ImproveTets::open_edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t
   std::uint32_t cur = t;
   for (int guard = 0;; ++guard) {
     if (guard > max_ring) return false;
-    const std::uint32_t r = ta_[4 * std::size_t(cur) + index_in(&tv_[4 * std::size_t(cur)], d)];
-    if (r == kImproveNone) break;
-    const std::uint32_t nt = r >> 2;
-    if (nt == t) return false;  // closed ring
-    const std::uint32_t e = tv_[4 * std::size_t(nt) + (r & 3)];
-    cur = nt;
-    d = c;
-    c = e;
+    if (!turn(cur, d, c)) break;  // (the roles swapped: across the face opposite d)
+    if (cur == t) return false;  // closed ring
   }
   // Forwards (across (a, b, d), opposite c) to the other boundary face.
   for (int guard = 0;; ++guard) {
     if (guard >= max_ring) return false;
     ring.push_back(c);
     tets.push_back(cur);
-    const std::uint32_t r = ta_[4 * std::size_t(cur) + index_in(&tv_[4 * std::size_t(cur)], c)];
-    if (r == kImproveNone) {
+    if (!turn(cur, c, d)) {
       ring.push_back(d);
       return true;
     }
-    const std::uint32_t nt = r >> 2;
-    const std::uint32_t e = tv_[4 * std::size_t(nt) + (r & 3)];
-    cur = nt;
-    c = d;
-    d = e;
   }
 }
 

@@ -131,6 +131,10 @@ class ImproveTets {
 
  private:
   void link_face(std::uint32_t t, int i, std::uint32_t ref);
+  /// One step around an edge: from tet cur, holding the edge and the vertices c and d, over
+  /// its face opposite c. False at the boundary; else cur is the next tet and (c, d) become
+  /// (d, its vertex across).
+  bool turn(std::uint32_t& cur, std::uint32_t& c, std::uint32_t& d) const;
   std::uint32_t new_slot();
 
   NodeSet* nodes_;
