@@ -326,6 +326,17 @@ TEST(RealPartFailureClasses, BoundaryEdgesFlipWithinTheSurface) {
   EXPECT_GT(on_q.min_dihedral, off_q.min_dihedral);  // 25.1 and 21.9 deg, 582 flips, when written
   // Every boundary vertex on the sphere (the flips add no node and move none).
   for (std::uint32_t f : on.boundary) EXPECT_LE(sm.q->distance(on.nodes.points.p(f)), 1e-12 * 10);
+  // Deterministic whatever the thread count (the sliding runs in colour classes on threads).
+  for (unsigned threads : {1u, 2u}) {
+    ImproveOptions o;
+    o.threads = threads;
+    ImproveStats st;
+    QualitySummary q;
+    const VolumeMesh again = sm.improved(o, st, q);
+    EXPECT_EQ(again.tets, on.tets) << threads << " threads";
+    EXPECT_EQ(again.nodes.points.xyz, on.nodes.points.xyz) << threads << " threads";
+    EXPECT_EQ(again.boundary, on.boundary) << threads << " threads";
+  }
 }
 
 }  // namespace
