@@ -110,7 +110,10 @@ ModelRanges check_model_ranges(const MeshJob& job, const SurfaceMesh& raw) {
     out.note = "min_size raised from " + num(out.min_size) + " (size / 1000) to " + num(floor) + why;
     out.min_size = floor;
   }
-  if (given && out.min_size > out.size) out.min_size = out.size;
+  if (given && out.min_size > out.size) {
+    out.min_size = out.size;
+    out.note += ", and min_size with it";
+  }
   return out;
 }
 
