@@ -341,30 +341,30 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
   const double smooth_threshold = deg_to_sine(options.smooth_angle);
   Counters c;
   SineCache cache(m, options.threads);
-  BoundaryContext caps;
-  caps.surface = &surface;
-  caps.query = &query;
-  caps.sizing = &sizing;
-  caps.max_distance = 0.8 * options.hausdorff_tolerance;
+  BoundaryContext boundary;
+  boundary.surface = &surface;
+  boundary.query = &query;
+  boundary.sizing = &sizing;
+  boundary.max_distance = 0.8 * options.hausdorff_tolerance;
   FeatureEdges features;
   if (options.feature_angle > 0) {
     features = detect_sharp_edges(surface.mesh, options.feature_angle);
-    caps.features = &features;
+    boundary.features = &features;
   }
   SmoothContext ctx;
   if (options.smooth_surface) {
     ctx.surface = &surface;
     ctx.query = &query;
-    if (options.slide_curved) ctx.boundary = &caps;
+    if (options.slide_curved) ctx.boundary = &boundary;
   }
   ctx.on_surface = 1e-11 * diag;
-  const BoundaryContext* flip_boundary = options.flip_boundary ? &caps : nullptr;
+  const BoundaryContext* flip_boundary = options.flip_boundary ? &boundary : nullptr;
   const double cap_threshold = options.cap_angle > 0 ? deg_to_sine(options.cap_angle) : -1;
   for (int r = 0; r < options.rounds; ++r) {
     const std::string n = std::to_string(r + 1);
     std::size_t ops = flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
     if (cap_threshold > 0) {
-      const std::size_t removed = cap_pass(m, cache, cap_threshold, caps);
+      const std::size_t removed = cap_pass(m, cache, cap_threshold, boundary);
       st.caps_removed += removed;
       if (removed) ops += removed + flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
     }
@@ -393,7 +393,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
   if (options.rounds > 0 && (cap_threshold > 0 || options.split_angle > 0)) {
     std::size_t ops = 0;
     if (cap_threshold > 0) {
-      const std::size_t removed = cap_pass(m, cache, cap_threshold, caps);
+      const std::size_t removed = cap_pass(m, cache, cap_threshold, boundary);
       st.caps_removed += removed;
       ops += removed;
     }

@@ -78,11 +78,11 @@ struct ImproveStats {
 /// Improves `mesh` in place. Every tet stays exactly positively oriented and not flat; the
 /// boundary faces stay on the surface (surface nodes slide on the input surface, within planar
 /// patches or within the tolerance on curved ones, feature nodes never move; the boundary face
-/// list changes only where a cap is taken
-/// out, and then within the tolerance of the local size `sizing` gives; boundary_tet is
-/// recomputed); regions are kept; nodes are added only by sliver splits; the result depends only on the input and
-/// the options (not on the thread count: the pass makes no random choice). Throws UsageError
-/// for bad options.
+/// list changes only where a cap is taken out or a boundary edge flipped, and then within the
+/// tolerance of the local size `sizing` gives; boundary_tet is recomputed); regions are kept;
+/// nodes are added only by sliver splits; the result depends only on the input and the
+/// options (not on the thread count: the pass makes no random choice). Throws UsageError for
+/// bad options.
 ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
                           const SurfaceQuery& query, const SizingField& sizing,
                           const ImproveOptions& options = {});
