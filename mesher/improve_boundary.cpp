@@ -3,25 +3,13 @@
 #include "mesher/improve_boundary.h"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "mesher/improve_quality.h"
+#include "sizing/segment_bvh.h"
 
 namespace kdmesh {
-
-namespace {
-
-double segment_distance2(const double* x, const double* a, const double* b) {
-  const double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  const double w[3] = {x[0] - a[0], x[1] - a[1], x[2] - a[2]};
-  const double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-  const double t = dd > 0 ? std::clamp((w[0] * d[0] + w[1] * d[1] + w[2] * d[2]) / dd, 0.0, 1.0) : 0.0;
-  double r = 0;
-  for (int k = 0; k < 3; ++k) r += (w[k] - t * d[k]) * (w[k] - t * d[k]);
-  return r;
-}
-
-}  // namespace
 
 bool face_on_surface(const double* a, const double* b, const double* c, const BoundaryContext& ctx) {
   static constexpr double kBary[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0.5, 0}, {0, 0.5, 0.5},
@@ -69,7 +57,7 @@ bool along_feature(const double* a, const double* b, const BoundaryContext& ctx)
       else hi = mid;
     }
     if (lo < fe.size() / 2 && fe[2 * lo] == p && fe[2 * lo + 1] == q &&
-        segment_distance2(m, sm.points.p(p), sm.points.p(q)) <= 0.0025 * len2)
+        std::pow(segment_distance(m, sm.points.p(p), sm.points.p(q)), 2) <= 0.0025 * len2)
       return true;
   }
   return false;
