@@ -303,10 +303,8 @@ bool other_two(const std::uint32_t* v, std::uint32_t a, std::uint32_t b, std::ui
 bool ImproveTets::edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b,
                             std::vector<std::uint32_t>& ring,
                             std::vector<std::uint32_t>& tets) const {
-  ring.clear();
-  tets.clear();
   std::uint32_t c, d;
-  if (!other_two(&tv_[4 * std::size_t(t)], a, b, c, d)) return false;
+  if (!ring_start(t, a, b, ring, tets, c, d)) return false;
   std::uint32_t cur = t;
   for (int guard = 0; guard < 256; ++guard) {
     ring.push_back(c);
@@ -315,6 +313,14 @@ bool ImproveTets::edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b,
     if (cur == t) return true;
   }
   return false;
+}
+
+bool ImproveTets::ring_start(std::uint32_t t, std::uint32_t a, std::uint32_t b,
+                             std::vector<std::uint32_t>& ring, std::vector<std::uint32_t>& tets,
+                             std::uint32_t& c, std::uint32_t& d) const {
+  ring.clear();
+  tets.clear();
+  return other_two(&tv_[4 * std::size_t(t)], a, b, c, d);
 }
 
 bool ImproveTets::turn(std::uint32_t& cur, std::uint32_t& c, std::uint32_t& d) const {
@@ -329,10 +335,8 @@ bool ImproveTets::turn(std::uint32_t& cur, std::uint32_t& c, std::uint32_t& d) c
 bool ImproveTets::open_edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b, int max_ring,
                                  std::vector<std::uint32_t>& ring,
                                  std::vector<std::uint32_t>& tets) const {
-  ring.clear();
-  tets.clear();
   std::uint32_t c, d;
-  if (!other_two(&tv_[4 * std::size_t(t)], a, b, c, d)) return false;
+  if (!ring_start(t, a, b, ring, tets, c, d)) return false;
   // Backwards (across the face (a, b, c), opposite d) to the tet with the first boundary face.
   std::uint32_t cur = t;
   for (int guard = 0;; ++guard) {

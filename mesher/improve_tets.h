@@ -135,6 +135,10 @@ class ImproveTets {
   /// its face opposite c. False at the boundary; else cur is the next tet and (c, d) become
   /// (d, its vertex across).
   bool turn(std::uint32_t& cur, std::uint32_t& c, std::uint32_t& d) const;
+  /// Clears ring and tets, and finds tet t's two vertices other than a and b in the order
+  /// (c, d) for which (a, b, c, d) is positive. False if a or b is not in t.
+  bool ring_start(std::uint32_t t, std::uint32_t a, std::uint32_t b, std::vector<std::uint32_t>& ring,
+                  std::vector<std::uint32_t>& tets, std::uint32_t& c, std::uint32_t& d) const;
   std::uint32_t new_slot();
 
   NodeSet* nodes_;
