@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "mesher/improve_quality.h"
+#include "mesher/improve_tets.h"
 #include "sizing/segment_bvh.h"
 
 namespace kdmesh {
@@ -61,6 +62,46 @@ bool along_feature(const double* a, const double* b, const BoundaryContext& ctx)
       return true;
   }
   return false;
+}
+
+namespace {
+
+/// A feature node c next to `from` (a mesh neighbour) lies strictly between a and b, within 5%
+/// of |ab| of the segment, and the edge (from, c) runs along a feature.
+bool skips_feature_node(const ImproveTets& m, std::uint32_t from, std::uint32_t a, std::uint32_t b,
+                        const BoundaryContext& ctx) {
+  static thread_local std::vector<std::uint32_t> star;
+  const double *pa = m.p(a), *pb = m.p(b);
+  double ab[3], len2 = 0;
+  for (int i = 0; i < 3; ++i) {
+    ab[i] = pb[i] - pa[i];
+    len2 += ab[i] * ab[i];
+  }
+  if (!(len2 > 0)) return false;
+  m.star(from, star);
+  for (std::uint32_t t : star)
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t c = m.v(t)[k];
+      if (c == a || c == b || m.nodes().kind[c] == NodeKind::surface ||
+          m.nodes().kind[c] == NodeKind::interior)
+        continue;
+      const double* pc = m.p(c);
+      double s = 0;
+      for (int i = 0; i < 3; ++i) s += (pc[i] - pa[i]) * ab[i];
+      s /= len2;
+      if (!(s > 0.02 && s < 0.98)) continue;
+      if (std::pow(segment_distance(pc, pa, pb), 2) > 0.0025 * len2) continue;
+      if (along_feature(m.p(from), pc, ctx)) return true;
+    }
+  return false;
+}
+
+}  // namespace
+
+bool keeps_feature(const ImproveTets& m, std::uint32_t a, std::uint32_t b, const BoundaryContext& ctx) {
+  if (!along_feature(m.p(a), m.p(b), ctx)) return false;
+  if (!ctx.features) return true;
+  return !skips_feature_node(m, a, a, b, ctx) && !skips_feature_node(m, b, a, b, ctx);
 }
 
 }  // namespace kdmesh

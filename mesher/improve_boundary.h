@@ -4,6 +4,8 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
 
+#include <cstdint>
+
 #include "mesher/surface_prepare.h"
 #include "mesher/surface_query.h"
 #include "sizing/features.h"
@@ -31,5 +33,15 @@ bool face_on_surface(const double* a, const double* b, const double* c, const Bo
 /// True if the mesh edge (a, b) may run along a feature edge: its midpoint lies within 5% of
 /// its length of a feature edge of the facet closest to the midpoint (or no features known).
 bool along_feature(const double* a, const double* b, const BoundaryContext& ctx);
+
+class ImproveTets;
+
+/// True if the mesh edge (a, b) of m is a feature edge the pass must keep: along_feature holds
+/// and the edge is no chord of the feature curve. A chord skips feature nodes: a feature node
+/// c, a mesh neighbour of a or b, lies within 5% of |ab| of the segment strictly between its
+/// ends, and (a, c) or (c, b) runs along a feature. The curve keeps its nodes and its shorter
+/// edges when such a chord goes (helmet.ply at diag/40: a boundary face spanning 17 rim nodes
+/// of a flat bottom face sat under a stack of 0.01 deg tets).
+bool keeps_feature(const ImproveTets& m, std::uint32_t a, std::uint32_t b, const BoundaryContext& ctx);
 
 }  // namespace kdmesh

@@ -66,7 +66,7 @@ bool remove_cap(ImproveTets& m, std::uint32_t t, const BoundaryContext& ctx) {
   // other vertices (inner[0], inner[1]), which the removal flips to (bnd[0], bnd[1]).
   const std::uint32_t k0 = v[inner[0]], k1 = v[inner[1]];
   if (nodes.kind[k0] != NodeKind::surface && nodes.kind[k1] != NodeKind::surface &&
-      along_feature(m.p(k0), m.p(k1), ctx))
+      keeps_feature(m, k0, k1, ctx))
     return false;
   if (boundary_edge(m, v[bnd[0]], v[bnd[1]])) return false;
   // The exposed faces: face `inner[j]` of t, oriented outward of the domain after the removal,

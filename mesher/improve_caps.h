@@ -12,7 +12,7 @@ namespace kdmesh {
 
 /// Removes tet t if it is a cap: exactly two of its faces are boundary faces, its four
 /// vertices are surface nodes (no interior node), the boundary edge the two faces share has a
-/// surface-kind end (so it is no feature edge), the edge between its other two vertices is
+/// surface-kind end or keeps_feature says it is no feature edge, the edge between its other two vertices is
 /// not a boundary edge already (the boundary stays a 2-manifold), and both faces it exposes
 /// face outward (against the normal of the closest facet) within ctx.max_distance of the
 /// surface. Also removes a tet with three boundary faces whose apex (the vertex they share) is

@@ -127,7 +127,7 @@ bool boundary_edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t 
   const std::size_t n = ring.size();
   if (n < 3) return false;  // one tet: a cap (mesher/improve_caps.h)
   if (nodes.kind[a] != NodeKind::surface && nodes.kind[b] != NodeKind::surface &&
-      along_feature(m.p(a), m.p(b), ctx))
+      keeps_feature(m, a, b, ctx))
     return false;  // a feature edge stays
   // The new boundary edge (r_0, r_m) must not be an edge already.
   const std::uint32_t r0 = ring.front(), rm = ring.back();

@@ -37,7 +37,7 @@ bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::u
 /// r_0..r_m (m + 1 >= 3 vertices, at most max_ring) is triangulated with the closing edge
 /// (r_0, r_m): the boundary faces (a, b, r_0) and (a, b, r_m) become (r_0, r_m, a) and
 /// (r_0, b, r_m), the boundary edge flip within the surface. Only where the surface allows
-/// it: (a, b) runs along no feature edge (an end is a surface node, or along_feature says
+/// it: (a, b) runs along no feature edge (an end is a surface node, or keeps_feature says
 /// no), (r_0, r_m) is not an edge yet, and both new faces lie on the surface within the
 /// context's tolerance (face_on_surface). Validated (flip_valid); the caller replaces with
 /// boundary_may_change. `floor` and `sines` as for edge_removal.

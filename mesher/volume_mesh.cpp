@@ -749,6 +749,16 @@ VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query
   }
   out.boundary.resize(bf.verts.size());
   for (std::size_t k = 0; k < bf.verts.size(); ++k) out.boundary[k] = new_id[bf.verts[k]];
+  {
+    std::vector<char> on_boundary(nn, 0);
+    for (std::uint32_t v : out.boundary) on_boundary[v] = 1;
+    for (std::uint32_t v = 0; v < nn; ++v)
+      if (!on_boundary[v] && out.nodes.kind[v] != NodeKind::interior) {
+        out.nodes.kind[v] = NodeKind::interior;
+        out.nodes.facet[v] = kNoFacet;
+        ++st.buried_nodes;
+      }
+  }
   out.boundary_tet.resize(bf.tet.size());
   for (std::size_t f = 0; f < bf.tet.size(); ++f) out.boundary_tet[f] = new_tet[bf.tet[f]];
   st.region_seconds = sw.seconds();

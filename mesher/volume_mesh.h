@@ -35,6 +35,11 @@ struct VolumeMeshStats {
   int insert_rounds = 0;              ///< of those, rounds that inserted the Steiner points into the
                                       ///< existing triangulation (the others, with dropped nodes, rebuilt it)
   std::size_t unused_nodes = 0;       ///< nodes no inside tet uses (e.g. exact duplicates), removed
+  /// Surface-kind nodes (placed on the surface) that the recovered boundary passes over: they
+  /// are in no boundary face, so they are interior nodes of the mesh and get that kind (the
+  /// quality pass may then move them off the surface; fandisk.ply at diag/40 kept a 0.04 deg
+  /// tet on such a node).
+  std::size_t buried_nodes = 0;
   DelaunayStats delaunay;             ///< of the first (full) tetrahedralization
   /// Summed over all rounds (the Delaunay / order time of the first round is delaunay.seconds).
   double order_seconds = 0, delaunay_seconds = 0, classify_seconds = 0, recover_seconds = 0;

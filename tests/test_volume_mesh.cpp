@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "core/rng.h"
 #include "mesher/boundary_faces.h"
+#include "mesher/mesh_improve.h"
 #include "mesher/mesh_check.h"
 #include "mesher/node_placement.h"
 #include "mesher/predicates.h"
@@ -444,6 +445,47 @@ TEST(VolumeMesh, InteriorNodeTooCloseToSurfaceIsDropped) {
   const MeshCheck c = check_volume_mesh(vm, s, q, h);
   EXPECT_TRUE(c.ok()) << failures(c);
   EXPECT_NEAR(c.mesh_volume, 26.0, 1e-11);
+}
+
+// A surface node that the recovered boundary passes over is no boundary vertex, yet it kept
+// its surface kind, so the quality pass never moved it off the surface: fandisk.ply at
+// diag/40 kept a 0.04 deg tet on such a node (its boundary face 0.02 h above it). Here a
+// surface-kind node 0.004 h under the top face of a cube is inside the convex hull, so no
+// boundary face can use it: it becomes an interior node, and the pass then lifts the flat tets
+// it makes with the top face.
+TEST(VolumeMesh, RegressionFandiskBuriedSurfaceNodeBecomesInterior) {
+  const Voxels vx = Voxels::block(1, 1, 1, 1.0);
+  PreparedSurface s = voxel_surface(vx);
+  const SurfaceQuery q(s.mesh);
+  const SizingField h = uniform_size(s, 0.25);
+  NodeSet nodes = voxel_nodes(vx, s, q, 4);
+  const double p[3] = {0.55, 0.6, 0.999};
+  double cp[3];
+  std::uint32_t facet = kNoFacet;
+  q.closest(p, cp, &facet);
+  nodes.push_back(p, NodeKind::surface, facet, 0.25f);
+  VolumeMesh vm = mesh_volume(s, q, h, nodes);
+  expect_basic_invariants(vm);
+  EXPECT_EQ(vm.stats.buried_nodes, 1u);
+  std::vector<char> on_boundary(vm.nodes.size_count(), 0);
+  for (std::uint32_t v : vm.boundary) on_boundary[v] = 1;
+  std::uint32_t buried = kNoFacet;
+  for (std::uint32_t v = 0; v < vm.nodes.size_count(); ++v) {
+    EXPECT_EQ(bool(on_boundary[v]), vm.nodes.kind[v] != NodeKind::interior) << "node " << v;
+    if (vm.nodes.points.p(v)[2] == p[2]) buried = v;
+  }
+  ASSERT_NE(buried, kNoFacet);
+  EXPECT_EQ(vm.nodes.kind[buried], NodeKind::interior);
+  EXPECT_EQ(vm.nodes.facet[buried], kNoFacet);
+  const double before = summarize_quality(to_tet_mesh(vm)).min_dihedral;
+  ImproveOptions o;
+  o.threads = 1;
+  improve_mesh(vm, s, q, h, o);
+  const double after = summarize_quality(to_tet_mesh(vm)).min_dihedral;
+  EXPECT_LT(before, 1.0);  // the flat tets under the top face
+  EXPECT_GE(after, 12.0);
+  const MeshCheck c = check_volume_mesh(vm, s, q, h);
+  EXPECT_TRUE(c.ok()) << failures(c);
 }
 
 TEST(VolumeMesh, ToTetMeshCarriesTheData) {

@@ -446,6 +446,7 @@ Meshed mesh_with_refinement(const MeshJob& job, const PreparedSurface& surface, 
     count_mesh();
     counts["steiner_points"] = ms.steiner_points;
     counts["dropped_nodes"] = ms.dropped_nodes;
+    counts["buried_nodes"] = ms.buried_nodes;
     counts["steiner_rounds"] = ms.rounds;
     counts["refinements"] = attempt;
 
