@@ -13,6 +13,7 @@
 #include <string>
 
 #include "core/rng.h"
+#include "mesher/improve_boundary.h"
 #include "mesher/improve_flips.h"
 #include "mesher/improve_quality.h"
 #include "mesher/improve_smooth.h"
@@ -249,6 +250,56 @@ TEST(ImproveTets, OpenEdgeRingAndABoundaryChangingReplace) {
   // tet this way (its faces with the others would vanish) is refused.
   EXPECT_FALSE(m.replace({created[0]}, {}, nullptr, true));
   EXPECT_EQ(m.live(), 4u);
+}
+
+// An edge between two feature nodes is kept as a feature edge unless it is a chord of the
+// feature curve: helmet.ply at diag/40 had a boundary face from one rim node to another 17
+// rim nodes on (over a 11 deg bend of the rim), under a stack of 0.01 deg tets, and no cap or
+// flip could take that edge. On the unit cube's edge y = z = 0 (a feature edge), a and b are
+// corners; c, a node of that curve 0.01 off it, lies between them: ab is a chord, ac is not.
+TEST(ImproveBoundary, RegressionHelmetChordOfAFeatureCurveIsNoFeatureEdge) {
+  SurfaceMesh cube;
+  for (int i = 0; i < 8; ++i) cube.points.push_back(i & 1, (i >> 1) & 1, -((i >> 2) & 1));
+  // Outward faces of [0,1] x [0,1] x [-1,0] (z = 0 is the top).
+  for (std::uint32_t t : {0u, 3u, 1u, 0u, 2u, 3u, 4u, 5u, 7u, 4u, 7u, 6u, 0u, 1u, 5u, 0u, 5u, 4u,
+                          2u, 6u, 7u, 2u, 7u, 3u, 0u, 4u, 6u, 0u, 6u, 2u, 1u, 3u, 7u, 1u, 7u, 5u})
+    cube.tris.push_back(t);
+  const PreparedSurface surface = prepare_surface(std::move(cube), "cube");
+  ASSERT_GT(surface.volume, 0);
+  const SurfaceQuery query(surface.mesh);
+  SizingOptions so;
+  so.max_size = 0.5;
+  const SizingField sizing = build_sizing_field(surface.mesh, so);
+  const FeatureEdges features = detect_sharp_edges(surface.mesh, 30);
+  BoundaryContext ctx;
+  ctx.surface = &surface;
+  ctx.query = &query;
+  ctx.sizing = &sizing;
+  ctx.features = &features;
+  NodeSet n;
+  auto add = [&](double x, double y, double z, NodeKind k) {
+    const double p[3] = {x, y, z};
+    n.push_back(p, k, kNoFacet, 0.5f);
+    return std::uint32_t(n.size_count() - 1);
+  };
+  const std::uint32_t a = add(0, 0, 0, NodeKind::corner), b = add(1, 0, 0, NodeKind::corner),
+                      c = add(0.5, 0.01, 0, NodeKind::edge), d = add(0.5, 0.5, 0, NodeKind::surface),
+                      e = add(0.5, 0.3, -0.5, NodeKind::interior);
+  {
+    // Only the tet (a, b, d, e): nothing lies between a and b.
+    NodeSet copy = n;
+    ImproveTets m(copy, positive(copy, a, b, d, e), {0});
+    EXPECT_TRUE(keeps_feature(m, a, b, ctx));
+  }
+  std::vector<std::uint32_t> tets = positive(n, a, b, d, e);
+  const auto t2 = positive(n, a, c, b, e);
+  tets.insert(tets.end(), t2.begin(), t2.end());
+  ImproveTets m(n, tets, {0, 0});
+  EXPECT_TRUE(along_feature(m.p(a), m.p(b), ctx));  // geometrically, ab runs along the edge
+  EXPECT_FALSE(keeps_feature(m, a, b, ctx));        // but it skips c
+  EXPECT_TRUE(keeps_feature(m, a, c, ctx));
+  EXPECT_TRUE(keeps_feature(m, c, b, ctx));
+  EXPECT_FALSE(keeps_feature(m, d, e, ctx));
 }
 
 // When pq misses the face (q moved beyond edge bc), a new tet would be inverted: no flip.
