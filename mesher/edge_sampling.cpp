@@ -103,7 +103,7 @@ std::vector<FeaturePolyline> chain_feature_edges(const SurfaceMesh& surface,
 }
 
 void place_edge_nodes(const SurfaceMesh& surface, const FeatureEdges& features,
-                      const SizingField& sizing, NodeSet& nodes) {
+                      const SizingField& sizing, double beta, SpacingGrid& grid, NodeSet& nodes) {
   const auto efacet = edge_facets(surface);
   auto facet_of_edge = [&](std::uint32_t a, std::uint32_t b) {
     const auto it = efacet.find(edge_key(a, b));
@@ -124,7 +124,9 @@ void place_edge_nodes(const SurfaceMesh& surface, const FeatureEdges& features,
     if (vfacet[c] == kNoFacet)
       throw GeometryError("feature corner " + std::to_string(c) + " is on no surface facet");
     const double* p = surface.points.p(c);
-    nodes.push_back(p, NodeKind::corner, vfacet[c], float(sizing(p)));
+    const float h = float(sizing(p));
+    nodes.push_back(p, NodeKind::corner, vfacet[c], h);
+    grid.insert(p, h);
   };
   for (const std::uint32_t c : features.corners)
     if (c < surface.points.size()) add_corner(c);
@@ -177,7 +179,10 @@ void place_edge_nodes(const SurfaceMesh& surface, const FeatureEdges& features,
       const double* b = surface.points.p(vb);
       const double x[3] = {a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]),
                            a[2] + t * (b[2] - a[2])};
-      nodes.push_back(x, NodeKind::edge, facet_of_edge(va, vb), float(sizing(x)));
+      const float h = float(sizing(x));
+      if (beta > 0 && grid.conflicts(x, h, beta)) continue;
+      nodes.push_back(x, NodeKind::edge, facet_of_edge(va, vb), h);
+      grid.insert(x, h);
     }
   }
 }

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <numbers>
@@ -276,10 +277,54 @@ TEST(NodePlacement, FeatureEdgeOutsideTheSurfaceIsAUsageError) {
 
 // ---- spacing and counts ----
 
+// Two feature curves that leave a corner at a small angle got nodes a fraction of h apart (the
+// first node of each at h from the corner): homer.ply, femur.ply and lever.stl kept tets under
+// 5 deg on such pairs, 0.01-0.06 h long. An edge node closer than beta (h_p + h_q) / 2 to a
+// node already placed is left out; the other curve keeps its nodes where the two are apart.
+TEST(NodePlacement, RegressionHomerFeatureCurvesAtASmallAngleKeepTheirNodesApart) {
+  Model m;
+  // Corner C = 0; the curves C-A and C-B, 5.7 deg apart, on a flat sheet with D and E.
+  for (const auto& p : std::vector<std::array<double, 3>>{{0, 0, 0}, {10, 0.5, 0}, {10, -0.5, 0}, {0, 5, 0}, {0, -5, 0}})
+    m.surface.mesh.points.push_back(p[0], p[1], p[2]);
+  m.surface.mesh.tris = {0, 2, 1, 0, 1, 3, 0, 4, 2};
+  m.features.edges = {0, 1, 0, 2};
+  m.features.corners = {0, 1, 2};
+  finish(m);
+  const double h = 1;
+  const SizingField sizing = uniform(m, h);
+  const double lo[3] = {-20, -20, -20};
+  auto place = [&](double beta) {
+    SpacingGrid grid(lo, h);
+    NodeSet nodes;
+    place_edge_nodes(m.surface.mesh, m.features, sizing, beta, grid, nodes);
+    EXPECT_EQ(grid.size(), nodes.size_count());
+    return nodes;
+  };
+  auto closest_pair = [](const NodeSet& ns) {
+    double d = INFINITY;
+    for (std::uint32_t i = 0; i < ns.size_count(); ++i)
+      for (std::uint32_t j = i + 1; j < ns.size_count(); ++j) d = std::min(d, dist(ns.points.p(i), ns.points.p(j)));
+    return d;
+  };
+  const NodeSet all = place(0), thinned = place(0.3);
+  EXPECT_LT(closest_pair(all), 0.11 * h);  // 2 h sin(2.86 deg) = 0.1 h at the first nodes
+  EXPECT_GE(closest_pair(thinned), 0.3 * h);
+  // Both curves keep nodes where they are apart: at x > 6 they are more than 0.6 h apart.
+  int far_a = 0, far_b = 0;
+  for (std::uint32_t i = 0; i < thinned.size_count(); ++i) {
+    const double* p = thinned.points.p(i);
+    if (thinned.kind[i] != NodeKind::edge || p[0] <= 6) continue;
+    (p[1] > 0 ? far_a : far_b) += 1;
+  }
+  EXPECT_GE(far_a, 3);
+  EXPECT_GE(far_b, 3);
+  EXPECT_LT(thinned.size_count(), all.size_count());
+}
+
 TEST(NodePlacement, NoTwoNodesCloserThanTheGuaranteedBound) {
   // Guarantee: a surface or interior node keeps >= 0.7 (h_p + h_q) / 2 from every node placed
-  // before it (the surface rule; interior nodes use 0.75). Feature nodes are mandatory; on
-  // this box their spacing is L/round(L/h) >= 0.7 / 0.75 h (see the edge test above), so all
+  // before it (the surface rule; interior nodes use 0.75). Feature nodes keep only 0.3 from
+  // other curves' nodes and corners; on this box their spacing is L/round(L/h) >= 0.7 / 0.75 h (see the edge test above), so all
   // pairs keep >= 0.7 h (h uniform). Brute force over all pairs.
   for (const bool cyl : {false, true}) {
     const Model m = cyl ? cylinder(0.5, 1, 48) : box(1, 1.3, 0.7);
