@@ -1,6 +1,7 @@
 // kdmesh — the objective of the quality-improvement pass: the smallest sine of a tet's six
-// dihedral angles (small for both sliver-flat and needle-obtuse angles), and the validity test
-// every new or moved tet passes.
+// dihedral angles, obtuse ones weighted so that it meets sin 12 deg exactly where the targets
+// hold (small for both sliver-flat and needle-obtuse angles), and the validity test every new
+// or moved tet passes.
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
 #include <algorithm>
