@@ -12,6 +12,15 @@
 
 namespace kdmesh {
 
+namespace {
+
+/// x lies within 5% of |ab| (len2 = |ab|^2) of the segment ab: "along" it, for feature tests.
+bool within_tube(const double* x, const double* a, const double* b, double len2) {
+  return std::pow(segment_distance(x, a, b), 2) <= 0.0025 * len2;
+}
+
+}  // namespace
+
 bool face_on_surface(const double* a, const double* b, const double* c, const BoundaryContext& ctx) {
   static constexpr double kBary[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0.5, 0}, {0, 0.5, 0.5},
                                          {0.5, 0, 0.5}, {2.0 / 3, 1.0 / 6, 1.0 / 6},
@@ -58,7 +67,7 @@ bool along_feature(const double* a, const double* b, const BoundaryContext& ctx)
       else hi = mid;
     }
     if (lo < fe.size() / 2 && fe[2 * lo] == p && fe[2 * lo + 1] == q &&
-        std::pow(segment_distance(m, sm.points.p(p), sm.points.p(q)), 2) <= 0.0025 * len2)
+        within_tube(m, sm.points.p(p), sm.points.p(q), len2))
       return true;
   }
   return false;
@@ -90,7 +99,7 @@ bool skips_feature_node(const ImproveTets& m, std::uint32_t from, std::uint32_t 
       for (int i = 0; i < 3; ++i) s += (pc[i] - pa[i]) * ab[i];
       s /= len2;
       if (!(s > 0.02 && s < 0.98)) continue;
-      if (std::pow(segment_distance(pc, pa, pb), 2) > 0.0025 * len2) continue;
+      if (!within_tube(pc, pa, pb, len2)) continue;
       if (along_feature(m.p(from), pc, ctx)) return true;
     }
   return false;

@@ -102,6 +102,14 @@ double dist(const double* a, const double* b) {
   return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
 }
 
+/// The smallest distance between two nodes, by brute force over all pairs.
+double closest_pair(const NodeSet& ns) {
+  double d = INFINITY;
+  for (std::uint32_t i = 0; i < ns.size_count(); ++i)
+    for (std::uint32_t j = i + 1; j < ns.size_count(); ++j) d = std::min(d, dist(ns.points.p(i), ns.points.p(j)));
+  return d;
+}
+
 /// Distance of p to the plane of facet f, and its barycentric coordinates in f (from
 /// sub-triangle areas projected on the facet normal).
 void facet_coords(const SurfaceMesh& s, std::uint32_t f, const double* p, double* plane_dist,
@@ -300,12 +308,6 @@ TEST(NodePlacement, RegressionHomerFeatureCurvesAtASmallAngleKeepTheirNodesApart
     EXPECT_EQ(grid.size(), nodes.size_count());
     return nodes;
   };
-  auto closest_pair = [](const NodeSet& ns) {
-    double d = INFINITY;
-    for (std::uint32_t i = 0; i < ns.size_count(); ++i)
-      for (std::uint32_t j = i + 1; j < ns.size_count(); ++j) d = std::min(d, dist(ns.points.p(i), ns.points.p(j)));
-    return d;
-  };
   const NodeSet all = place(0), thinned = place(0.3);
   EXPECT_LT(closest_pair(all), 0.11 * h);  // 2 h sin(2.86 deg) = 0.1 h at the first nodes
   EXPECT_GE(closest_pair(thinned), 0.3 * h);
@@ -331,11 +333,7 @@ TEST(NodePlacement, NoTwoNodesCloserThanTheGuaranteedBound) {
     const double h = cyl ? 0.09 : 0.12;
     const SurfaceQuery q(m.surface.mesh);
     const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, h));
-    double dmin = INFINITY;
-    for (std::uint32_t i = 0; i < ns.size_count(); ++i)
-      for (std::uint32_t j = i + 1; j < ns.size_count(); ++j)
-        dmin = std::min(dmin, dist(ns.points.p(i), ns.points.p(j)));
-    EXPECT_GE(dmin, 0.7 * h * (1 - 1e-12)) << (cyl ? "cylinder" : "box");
+    EXPECT_GE(closest_pair(ns), 0.7 * h * (1 - 1e-12)) << (cyl ? "cylinder" : "box");
   }
 }
 
