@@ -103,7 +103,8 @@ std::vector<FeaturePolyline> chain_feature_edges(const SurfaceMesh& surface,
 }
 
 void place_edge_nodes(const SurfaceMesh& surface, const FeatureEdges& features,
-                      const SizingField& sizing, double beta, SpacingGrid& grid, NodeSet& nodes) {
+                      const SizingField& sizing, double beta, SpacingGrid& grid, NodeSet& nodes,
+                      SpacingGrid* segment_balls) {
   const auto efacet = edge_facets(surface);
   auto facet_of_edge = [&](std::uint32_t a, std::uint32_t b) {
     const auto it = efacet.find(edge_key(a, b));
@@ -168,6 +169,9 @@ void place_edge_nodes(const SurfaceMesh& surface, const FeatureEdges& features,
     const std::size_t n = std::max<std::size_t>(1, std::size_t(std::llround(total)));
     const std::size_t first = pl.closed ? 0 : 1;  // a loop's start is an edge node too
     std::size_t pc = 0;
+    // The polyline's nodes in order (the corners at an open one's ends), for segment_balls.
+    std::vector<double> kept;
+    if (!pl.closed) kept.insert(kept.end(), surface.points.p(pl.points.front()), surface.points.p(pl.points.front()) + 3);
     for (std::size_t i = first; i < n; ++i) {
       const double target = total * double(i) / double(n);
       while (pc + 1 < pieces.size() && pieces[pc].i1 < target) ++pc;
@@ -183,6 +187,19 @@ void place_edge_nodes(const SurfaceMesh& surface, const FeatureEdges& features,
       if (beta > 0 && grid.conflicts(x, h, beta)) continue;
       nodes.push_back(x, NodeKind::edge, facet_of_edge(va, vb), h);
       grid.insert(x, h);
+      kept.insert(kept.end(), x, x + 3);
+    }
+    if (!segment_balls) continue;
+    const double* last = surface.points.p(pl.closed ? pl.points.front() : pl.points.back());
+    if (pl.closed && kept.size() >= 3) last = kept.data();  // the loop closes at its first node
+    const double end[3] = {last[0], last[1], last[2]};  // (kept may move as it grows)
+    kept.insert(kept.end(), end, end + 3);
+    for (std::size_t k = 3; k < kept.size(); k += 3) {
+      const double* a = &kept[k - 3];
+      const double* b = &kept[k];
+      const double mid[3] = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+      const double len = std::hypot(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
+      if (len > 0) segment_balls->insert(mid, len);
     }
   }
 }

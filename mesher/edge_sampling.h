@@ -36,7 +36,14 @@ std::vector<FeaturePolyline> chain_feature_edges(const SurfaceMesh& surface,
 /// polyline) is left out: two curves that leave a corner at a small angle, or run side by side,
 /// would otherwise get nodes a hundredth of h apart (homer.ply, femur.ply, lever.stl: tets
 /// under 5 deg on such pairs). beta = 0 keeps every node.
+///
+/// If `segment_balls` is given, it receives the diametral ball of every segment between
+/// consecutive nodes of a polyline: its midpoint, stored with h = the segment's length, so
+/// that segment_balls->conflicts(p, 0, 1) says whether p is strictly inside one. A segment
+/// whose ball holds no other node is an edge of every Delaunay tetrahedralization (Gabriel),
+/// which is how the surface sampling keeps the feature curves in the mesh.
 void place_edge_nodes(const SurfaceMesh& surface, const FeatureEdges& features,
-                      const SizingField& sizing, double beta, SpacingGrid& grid, NodeSet& nodes);
+                      const SizingField& sizing, double beta, SpacingGrid& grid, NodeSet& nodes,
+                      SpacingGrid* segment_balls = nullptr);
 
 }  // namespace kdmesh

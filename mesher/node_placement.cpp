@@ -75,13 +75,14 @@ NodeSet place_nodes(const PreparedSurface& surface, const SurfaceQuery& query,
   NodeSet nodes;
 
   progress("edges", 0);
-  place_edge_nodes(mesh, features, sizing, kFeatureBeta, grid, nodes);
+  SpacingGrid feature_balls(glo, s0);
+  place_edge_nodes(mesh, features, sizing, kFeatureBeta, grid, nodes, &feature_balls);
   progress("edges", 1);
 
   SurfaceSamplingOptions so;
   so.seed = options.seed;
   so.beta = kSurfaceBeta;
-  place_surface_nodes(mesh, sizing, so, grid, nodes, [&](double f) { progress("surface", f); });
+  place_surface_nodes(mesh, sizing, so, grid, nodes, [&](double f) { progress("surface", f); }, &feature_balls);
 
   InteriorFillOptions io;
   io.beta = kInteriorBeta;

@@ -142,7 +142,7 @@ void SegmentBvh::build(std::vector<std::uint32_t>& ids, const std::vector<double
   split_at(mid);
 }
 
-double SegmentBvh::min_value(const double* x, double g, double best) const {
+double SegmentBvh::min_value(const double* x, double g, double best, double reach) const {
   if (nodes_.empty()) return best;
   const double inv_g = 1 / g;
   // Squared distance from x to a node's box, in double (the float bounds convert exactly).
@@ -154,10 +154,11 @@ double SegmentBvh::min_value(const double* x, double g, double best) const {
     }
     return d2;
   };
-  // Could anything below a node beat best? (w_min + g·dist >= best <=> dist >= (best-w_min)/g.)
+  // Could anything below a node beat best? (w_min + g·max(0, dist - reach) >= best <=>
+  // dist >= (best - w_min) / g + reach, when best > w_min.)
   auto may_improve = [&](double wmin, double d2) {
     const double r = (best - wmin) * inv_g;
-    return r > 0 && d2 < r * r;
+    return r > 0 && d2 < (r + reach) * (r + reach);
   };
   // The stack holds at most one pending sibling per level plus one: depth <= kMedianDepth +
   // log2(2^27) + 1 (the count split of oversized leaves adds at most log2 too), < kStack.
@@ -180,7 +181,8 @@ double SegmentBvh::min_value(const double* x, double g, double best) const {
         const double r[3] = {xa[0] - t * s.d[0], xa[1] - t * s.d[1], xa[2] - t * s.d[2]};
         const double d2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
         const double lim = (best - s.w) * inv_g;
-        if (lim > 0 && d2 < lim * lim) best = std::min(best, s.w + g * std::sqrt(d2));
+        if (lim > 0 && d2 < (lim + reach) * (lim + reach))
+          best = std::min(best, s.w + g * std::max(0.0, std::sqrt(d2) - reach));
       }
       continue;
     }

@@ -38,8 +38,10 @@ class SegmentBvh {
   SegmentBvh() = default;
   explicit SegmentBvh(const WeightedSegments& segments);
 
-  /// min(best, min_i (w_i + g·d(x, s_i))) for gradation g > 0.
-  double min_value(const double* x, double g, double best) const;
+  /// min(best, min_i (w_i + g·max(0, d(x, s_i) - reach))) for gradation g > 0 and reach >= 0.
+  /// With reach 0 it is the field's value at x; with reach r it is a lower bound of the value
+  /// at every point within r of x (d(y, s) >= d(x, s) - r).
+  double min_value(const double* x, double g, double best, double reach = 0) const;
   std::size_t size() const { return segs_.size(); }
   std::size_t num_nodes() const { return nodes_.size(); }
   /// Levels below the root (0 for a single leaf); at most 48 + log2(size()) + 1 by construction.

@@ -64,7 +64,9 @@ struct SizingField::Impl {
   std::vector<BallZone> balls;
   SizingAutoStats auto_stats;
 
-  double eval(const double* x) const {
+  /// h at x (reach 0), or a lower bound of h over the ball of radius reach around x: every
+  /// term is size + g * distance, and a point within reach of x is at most reach closer.
+  double eval(const double* x, double reach = 0) const {
     double best = h_max;
     for (const BoxZone& b : boxes) {
       if (!(b.size < best)) continue;
@@ -73,26 +75,28 @@ struct SizingField::Impl {
         const double e = std::max({b.lo[k] - x[k], 0.0, x[k] - b.hi[k]});
         d2 += e * e;
       }
-      best = std::min(best, b.size + g * std::sqrt(d2));
+      best = std::min(best, b.size + g * std::max(0.0, std::sqrt(d2) - reach));
     }
     for (const BallZone& b : balls) {
       if (!(b.size < best)) continue;
       const double dx = x[0] - b.c[0], dy = x[1] - b.c[1], dz = x[2] - b.c[2];
-      const double d = std::max(0.0, std::sqrt(dx * dx + dy * dy + dz * dz) - b.r);
+      const double d = std::max(0.0, std::sqrt(dx * dx + dy * dy + dz * dz) - b.r - reach);
       best = std::min(best, b.size + g * d);
     }
     // Plane sections: the interior term only (size + g|dz| when x projects into the region);
-    // outside, the distance is to the boundary curve, whose segments are in the BVH.
+    // outside, the distance is to the boundary curve, whose segments are in the BVH. A lower
+    // bound over a ball takes the term wherever the plane is in reach (the ball may reach
+    // the region even when x does not project into it).
     for (const PlaneZone& p : planes) {
       const double r[3] = {x[0] - p.origin[0], x[1] - p.origin[1], x[2] - p.origin[2]};
       const double dz = r[0] * p.normal[0] + r[1] * p.normal[1] + r[2] * p.normal[2];
-      const double value = p.size + g * std::fabs(dz);
+      const double value = p.size + g * std::max(0.0, std::fabs(dz) - reach);
       if (!(value < best)) continue;
       const double pu = r[0] * p.u[0] + r[1] * p.u[1] + r[2] * p.u[2];
       const double pv = r[0] * p.v[0] + r[1] * p.v[1] + r[2] * p.v[2];
-      if (p.locator.contains(pu, pv)) best = value;
+      if (reach > 0 || p.locator.contains(pu, pv)) best = value;
     }
-    best = segments.min_value(x, g, best);
+    best = segments.min_value(x, g, best, reach);
     return std::max(h_min, std::min(h_max, best));
   }
 };
@@ -106,6 +110,14 @@ namespace {
 double SizingField::operator()(const double* x) const {
   if (!impl_) empty_field();
   return impl_->eval(x);
+}
+double SizingField::lower_bound(const double* x, double radius) const {
+  if (!impl_) empty_field();
+  if (!(radius > 0)) return impl_->eval(x);
+  // Both are lower bounds: the terms with shortened distances, and h(x) - g r (h is
+  // g-Lipschitz). The first is the tighter far from zones, the second beside a plane zone,
+  // whose in-region term the first takes wherever the plane is in reach.
+  return std::max(impl_->eval(x, radius), impl_->eval(x) - impl_->g * radius);
 }
 double SizingField::max_size() const {
   if (!impl_) empty_field();

@@ -66,6 +66,11 @@ class SizingField {
   SizingField() = default;
   /// Target edge length at x (xyz).
   double operator()(const double* x) const;
+  /// A lower bound of h over the ball of the given radius around x, never above h anywhere
+  /// in it: the larger of h(x) - g radius (h is g-Lipschitz) and the field with every zone's
+  /// distance shortened by the radius (attained for a lone point zone; h_max far from every
+  /// zone, where h(x) - g radius may be below h_min). Equals h(x) at radius 0.
+  double lower_bound(const double* x, double radius) const;
   double max_size() const;
   double min_size() const;
   const SizingOptions& options() const;

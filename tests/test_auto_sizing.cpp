@@ -182,11 +182,11 @@ TEST(RealPartFailureClasses, CoarseSizeOnACurvedPartKeepsTheVolume) {
 
 // The summary counted the nodes before the quality pass, whose sliver splits add interior nodes:
 // it said 274382 nodes for a gear box deck of 274384 (test_cli_calculix). It counts what is
-// written now. The 14-sided prism at size 3 has slivers to split (asserted, so that this test
+// written now. The 20-sided prism at size 3 has a sliver to split (asserted, so that this test
 // says when it stops exercising the bug; the sphere it used had none left once surface nodes
-// slid and boundary edges flipped).
+// slid and boundary edges flipped, and the 14-sided prism none once the surface sweep changed).
 TEST(RealPartFailureClasses, SummaryCountsTheNodesWritten) {
-  MeshJob job = job_for(cylinder(14, 10, 30), 3, "counts");
+  MeshJob job = job_for(cylinder(20, 10, 30), 3, "counts");
   job.nodes = test::scratch_path("auto_sizing_nodes", ".xyz");
   const MeshJobResult r = run_mesh_job(job);
   ASSERT_TRUE(r.ok()) << r.summary.dump(1);
@@ -269,7 +269,13 @@ TEST(RealPartFailureClasses, BoundaryCapsAndSliversAreRemoved) {
   EXPECT_EQ(off.caps_removed + off.splits, 0u);
   EXPECT_GT(on.caps_removed, 0u);
   EXPECT_GT(q_on.min_dihedral, q_off.min_dihedral);
-  EXPECT_GE(q_on.min_dihedral, 5.0);
+  // With the surface nodes sliding and the boundary edges flipping too (the default pass),
+  // no tet is under 5 deg, the target (19.9 deg here). Caps and splits alone reached
+  // 5.0 deg on one surface sampling and 4.7 on the next (from 1.7): not their guarantee.
+  ImproveStats all;
+  QualitySummary q_all;
+  sm.improved(ImproveOptions{}, all, q_all);
+  EXPECT_GE(q_all.min_dihedral, 5.0);
 }
 
 // The quality pass never moved surface nodes on curved surfaces, so the tets at a curved

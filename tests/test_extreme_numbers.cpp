@@ -213,6 +213,26 @@ TEST(ExtremeNumbers, DelaunayCheckAtExtremeMagnitudes) {
   }
 }
 
+// Issue 19: the gradation was bounded at 2 by choice. The bound is now derived (tools/lib/
+// numeric_ranges.h): an edge of length L leaving a zone of size s has the size s + g L / 2 at
+// its midpoint, which L reaches only when g < 2. So 2 is refused, naming the option and the
+// reason, and just below it the block refined along its edges meshes and passes its check.
+TEST(ExtremeNumbers, GradationIsBelowTheBoundNoMeshCanFollow) {
+  const CliResult at = kdmesh("mesh " + kBlock + " --size 10 --gradation 2 -q");
+  EXPECT_EQ(at.code, 2) << at.err;
+  EXPECT_TRUE(contains(at.err, "gradation (--gradation) 2 must be below 2")) << at.err;
+  EXPECT_TRUE(contains(at.err, "s + g L / 2")) << at.err;
+  const fs::path dir = kdmesh::test::fresh_dir(tmpdir(), "gradation_bound");
+  const std::string summary = (dir / "g.json").string();
+  const CliResult below = kdmesh("mesh " + kBlock + " --size 10 --refine-edges 30 --edge-size 1 --gradation 1.99 -o " +
+                                 (dir / "g.vtu").string() + " --summary " + summary + " -q");
+  ASSERT_EQ(below.code, 0) << below.err;
+  const auto j = nlohmann::json::parse(kdmesh::test::slurp(summary));
+  EXPECT_EQ(j["status"], "ok");
+  EXPECT_EQ(j["mesh_check"]["pass"], true);
+  EXPECT_EQ(j["counts"]["nodes_by_kind"]["corner"], 8);
+}
+
 // The property: size, scale and gradation swept over 1e-300 ... 1e300 give either a correct
 // mesh (its volume the scaled cube's, its 8 corners kept) or a clear error of class usage,
 // input or resource, each within seconds. The scales include each side of the length bounds
@@ -223,7 +243,7 @@ TEST(ExtremeNumbers, SweepGivesCorrectMeshOrClearError) {
   for (int e = -300; e <= 300; e += 50) exps.push_back(e);
   const std::vector<double> scales = {1e-300, 1e-100, 1e-37, 1e-36, 1e-31, 1e-25, 1e-5, 1,
                                       1e5, 1e14, 6e15, 1e25, 1e35, 1e37, 1e100, 1e300};
-  const std::vector<double> gradations = {1e-300, 1e-10, 0.3, 2, 2.5, 1e10, 1e300};
+  const std::vector<double> gradations = {1e-300, 1e-10, 0.3, 1.99, 2, 2.5, 1e10, 1e300};
   int meshed = 0, refused = 0;
   for (const double s : scales) {
     std::vector<double> sizes;

@@ -16,6 +16,8 @@
 #include "mesher/edge_sampling.h"
 #include "mesher/node_placement.h"
 #include "mesher/size_fidelity.h"
+#include "mesher/spacing_grid.h"
+#include "mesher/surface_sampling.h"
 
 namespace kdmesh {
 namespace {
@@ -321,6 +323,83 @@ TEST(NodePlacement, RegressionHomerFeatureCurvesAtASmallAngleKeepTheirNodesApart
   EXPECT_GE(far_a, 3);
   EXPECT_GE(far_b, 3);
   EXPECT_LT(thinned.size_count(), all.size_count());
+}
+
+// Issue 19: the surface sweep split a facet into 4 similar pieces down to the local size, so
+// a long thin facet cost (length / h)^2: a 64-sided cylinder 100 long at size 0.3 spent 6
+// minutes placing nodes and 2 s meshing them. The sweep now cuts a thin piece across into
+// strips: a cylinder 4 times longer costs 3.6 times the points (15.9 times before; 7 with
+// longest-edge bisection, whose thin pieces split into 3 per halving), and the points stay a
+// bounded multiple of the nodes: a triangular pattern of spacing step = beta h / 2 is
+// 4.6 / (beta h)^2 points per unit area, nodes beta h apart about 0.65 / (beta h)^2, plus a
+// row and a point more per piece (16.5 points per node here; 14,300 before, growing with the
+// length).
+TEST(NodePlacement, RegressionLongThinFacetsSweepInLinearWork) {
+  auto sweep = [](double H) {
+    const Model m = cylinder(1.0, H, 64);
+    const SizingField f = uniform(m, 0.1);
+    const double lo[3] = {-2, -2, -1};
+    SpacingGrid grid(lo, 0.1);
+    NodeSet nodes;
+    const SurfaceSamplingStats st = place_surface_nodes(m.surface.mesh, f, SurfaceSamplingOptions{}, grid, nodes);
+    return std::pair{st, nodes.size_count()};
+  };
+  const auto [a, na] = sweep(10);
+  const auto [b, nb] = sweep(40);
+  EXPECT_GT(nb, 3.5 * double(na));
+  EXPECT_LT(double(b.sweep_points) / double(a.sweep_points), 4.4) << a.sweep_points << " " << b.sweep_points << " pieces " << a.sweep_pieces << " " << b.sweep_pieces;
+  EXPECT_LT(double(b.sweep_points), 20.0 * double(nb)) << b.sweep_points << " points for " << nb << " nodes";
+}
+
+// The gear box (test_cli_calculix) lost a feature edge: a surface node inside the diametral
+// ball of the segment between two consecutive edge nodes kept that segment out of the Delaunay
+// tetrahedralization, recovery added Steiner points beside it, and the boundary groups found
+// the curve not followed. The spacing alone does not keep nodes out of those balls: with
+// beta = 0.7 < 1/sqrt(2), a shell of each ball near the segment's midpoint is farther than
+// beta h from both ends. The surface sampling now keeps out of them. Checked here by brute
+// force over the consecutive feature nodes of a box's edges, at sizes that do and do not
+// divide its sides.
+TEST(NodePlacement, RegressionGearboxSurfaceNodeInsideAFeatureSegmentsBall) {
+  const Model m = box(1.0, 0.8, 0.6);
+  int inside_unprotected = 0;
+  for (const double h : {0.3, 0.23, 0.17, 0.13}) {
+    const SizingField f = uniform(m, h);
+    for (const bool protect : {false, true}) {
+      const double lo[3] = {-1, -1, -1};
+      SpacingGrid grid(lo, h / 4), balls(lo, h / 4);
+      NodeSet nodes;
+      place_edge_nodes(m.surface.mesh, m.features, f, 0.3, grid, nodes, &balls);
+      SurfaceSamplingOptions so;
+      so.beta = 0.7;
+      place_surface_nodes(m.surface.mesh, f, so, grid, nodes, {}, protect ? &balls : nullptr);
+      std::vector<std::uint32_t> feat, surf;
+      for (std::uint32_t i = 0; i < nodes.size_count(); ++i)
+        (nodes.kind[i] == NodeKind::surface ? surf : feat).push_back(i);
+      int inside = 0;
+      for (const std::uint32_t a : feat)
+        for (const std::uint32_t b : feat) {
+          const double *pa = nodes.points.p(a), *pb = nodes.points.p(b);
+          const double L = dist(pa, pb);
+          if (a >= b || L > 2 * h) continue;
+          // Consecutive on one box edge: two coordinates shared, and no feature node between.
+          const double side[3] = {1.0, 0.8, 0.6};
+          int shared = 0;
+          for (int k = 0; k < 3; ++k) shared += pa[k] == pb[k] && (pa[k] == 0 || pa[k] == side[k]);
+          bool between = false;
+          for (const std::uint32_t c : feat)
+            between |= c != a && c != b && std::fabs(dist(pa, nodes.points.p(c)) + dist(nodes.points.p(c), pb) - L) < 1e-12;
+          if (shared != 2 || between) continue;
+          const double mid[3] = {(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2};
+          for (const std::uint32_t q : surf) inside += dist(nodes.points.p(q), mid) < L / 2;
+        }
+      if (protect) {
+        EXPECT_EQ(inside, 0) << "h " << h;
+      } else {
+        inside_unprotected += inside;
+      }
+    }
+  }
+  EXPECT_GT(inside_unprotected, 0);  // the defect is there without the balls
 }
 
 TEST(NodePlacement, NoTwoNodesCloserThanTheGuaranteedBound) {

@@ -643,6 +643,46 @@ TEST(SizingCrossCheck, CylinderWithEveryZoneKind) {
   cross_check(cyl, o, lo, hi, 3000, 7);
 }
 
+// SizingField::lower_bound (the surface sweep's test of where the size varies, issue 19):
+// at radius 0 it is h; at radius r it is below h everywhere in the ball and never below the
+// Lipschitz bound h(x) - g r; far from every zone it is h_max, where h(x) - g r is not.
+TEST(SizingField, LowerBoundHoldsOverTheBallAndEqualsHAtRadiusZero) {
+  const SurfaceMesh cyl = cylinder(64, 1.0, 3.0);
+  SizingZone sharp = zone(Kind::sharp_edges, 0.05, {});
+  sharp.angle_deg = 30;
+  SizingOptions o = opts(0.8, 0.4,
+                         {sharp, zone(Kind::plane, 0.03, {0.1, 0.0, 1.5, 0.3, 0.2, 1.0}),
+                          zone(Kind::segment, 0.04, {-1, -1, 0.5, 1, 1, 2.5}),
+                          zone(Kind::point, 0.02, {0.3, -0.4, 2.2}),
+                          zone(Kind::box, 0.09, {-0.2, -0.2, 1.0, 0.2, 0.3, 1.4}),
+                          zone(Kind::ball, 0.08, {0.5, 0.5, 0.5, 0.25})});
+  o.min_size = 0.025;
+  const SizingField h = build_sizing_field(cyl, o);
+  std::mt19937_64 rng(19);
+  std::uniform_real_distribution<double> unit(0, 1), box(-1.6, 3.6);
+  int tighter = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const double x[3] = {box(rng) * 0.6, box(rng) * 0.6, box(rng)};
+    ASSERT_EQ(h.lower_bound(x, 0), h(x));
+    for (const double r : {0.01, 0.1, 0.5}) {
+      const double lb = h.lower_bound(x, r);
+      ASSERT_GE(lb, std::max(o.min_size, h(x) - o.gradation * r) * (1 - 1e-12));
+      tighter += lb > std::max(o.min_size, h(x) - o.gradation * r) * (1 + 1e-9);
+      for (int k = 0; k < 20; ++k) {  // points of the ball, its sphere included
+        double d[3], n = 0;
+        for (double& c : d) c = unit(rng) - 0.5, n += c * c;
+        const double t = (k % 4 == 0 ? 1.0 : std::cbrt(unit(rng))) * r / std::sqrt(n);
+        const double y[3] = {x[0] + t * d[0], x[1] + t * d[1], x[2] + t * d[2]};
+        ASSERT_LE(lb, h(y) * (1 + 1e-12)) << "x " << x[0] << " " << x[1] << " " << x[2] << " r " << r;
+      }
+    }
+  }
+  EXPECT_GT(tighter, 0);  // 698 of the 6000 here
+  const double far[3] = {20, 20, 20};
+  EXPECT_EQ(h(far), 0.8);
+  EXPECT_EQ(h.lower_bound(far, 0.5), 0.8);
+}
+
 TEST(SizingCrossCheck, LPrismPlanesThroughTheNotch) {
   const SurfaceMesh l = l_prism();
   const SizingOptions o = opts(1.0, 0.3,

@@ -30,11 +30,10 @@ void check_option_ranges(const MeshJob& job) {
   positive_finite(job.sizing.max_size, "size (--size)");
   if (job.sizing.min_size != 0) positive_finite(job.sizing.min_size, "min_size (--min-size)");
   positive_finite(job.sizing.gradation, "gradation (--gradation)");
-  if (job.sizing.gradation > kMaxGradation)
-    throw UsageError(who + "gradation (--gradation) " + num(job.sizing.gradation) + " is above " +
-                     num(kMaxGradation) + ": neighbouring elements would differ in size by more than " +
-                     num(1 + kMaxGradation) + "x, which no mesh honours (and the surface sampling's work grows " +
-                     "as its square)");
+  if (!(job.sizing.gradation < kMaxGradation))
+    throw UsageError(who + "gradation (--gradation) " + num(job.sizing.gradation) + " must be below " +
+                     num(kMaxGradation) + ": an edge of length L leaving a zone of size s has the size s + g L / 2 " +
+                     "at its midpoint, which L reaches only when g < 2, so no mesh could follow the field");
   if (!(std::isfinite(job.sharp_angle) && job.sharp_angle >= 0 && job.sharp_angle < 180))
     throw UsageError(who + "sharp_angle (--sharp-angle) " + num(job.sharp_angle) + " must be in [0, 180)");
   for (std::size_t i = 0; i < job.sizing.zones.size(); ++i) {

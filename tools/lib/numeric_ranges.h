@@ -61,13 +61,18 @@ static_assert(kMaxMagnitudePerExtent * 0x1p-51 <= kOnSurfaceDistance);
 /// derived, and let such jobs through (exit 4 after 18 s instead of a usage error).
 constexpr double kMinSizePerExtent = 0x1p-22;
 static_assert(kMinSizePerExtent * 0.7 / (12 * 8) >= kOnSurfaceDistance);
-/// Largest gradation. Two bounds meet here. What a mesh can honour: at gradation g, the size
-/// one element length s away from a zone of size s is (1 + g) s, so above 2 neighbouring
-/// elements would differ by more than 3x, which no tetrahedral mesh of bounded quality gives.
-/// What the surface sampling costs: its sweep (mesher/surface_sampling.cpp) splits facets until
-/// g D <= h / 2, so its work per surface node grows as g^2: measured on the block at size 10,
-/// node placement takes 0.10 s at g = 1, 0.25 s at 2, 0.45 s at 3, 2.9 s at 5, 11.6 s at 10,
-/// and minutes at 50 (it did not end: issue 19).
+/// Gradations must be below this, derived from what the field asks of a mesh. The size is
+/// s + g d at distance d from a zone of size s, and a mesh follows it when an edge's length
+/// is the size at its midpoint (mesher/size_fidelity.h). An edge of length L leaving the zone
+/// has the size s + g L / 2 at its midpoint: L = s + g L / 2 has the solution
+/// L = s / (1 - g / 2) only for g < 2. At g >= 2 every such edge is shorter than its size,
+/// whatever its length (the ratio L / (s + g L / 2) stays below 2 / g <= 1), so no mesh follows
+/// the field. Below 2 the work stays bounded by the node count: the surface sweep bisects
+/// only where the size's lower bound over a piece is under half its centre's
+/// (mesher/surface_sampling.cpp), and the spacing grid skips levels of cell size below
+/// h (1 - g beta / 2) / (2 (1 + g beta / 2)), at least h (1 - beta) / (2 (1 + beta)) for
+/// beta < 1 (1/18 of h at the surface's beta 0.8; mesher/spacing_grid.h). (This replaced "at most 2", a chosen bound, issue 19; the sweep's
+/// former split grew its work as g^2 and took minutes at g = 50.)
 constexpr double kMaxGradation = 2;
 
 /// Checks the job's option values alone (before reading anything): size, min_size, gradation,
