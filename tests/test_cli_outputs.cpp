@@ -101,6 +101,24 @@ TEST(OutputsNeverClobber, FifoDirectoryAndSymlinkAreRefused) {
 
 // A batch file cannot write outside --out-dir (default: its own directory): absolute paths,
 // '..' and symbolic links leading out are refused at load time with file:line and the key.
+// `kdmesh batch jobs.yaml` run in the YAML's own folder refused every output that did not
+// exist yet as leading "outside the output directory through a symbolic link": the weakly
+// canonical form of the relative, not yet existing path stayed relative. Found meshing the
+// gear box by hand; every test had passed absolute paths.
+TEST(OutputsNeverClobber, RegressionBatchRunInItsOwnFolderWritesItsOutputs) {
+  const fs::path d = fresh("own_folder");
+  write_cube(d / "cube.stl", 10);
+  write_text(d / "jobs.yaml", "jobs:\n  - name: a\n    input: cube.stl\n    size: 10\n    output: {vtu: a.vtu, summary: a.json}\n");
+  const CliResult r = kdmesh::test::run_kdmesh("batch jobs.yaml -q", tmpdir(), "cd '" + d.string() + "' &&");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::is_regular_file(d / "a.vtu"));
+  EXPECT_TRUE(fs::is_regular_file(d / "a.json"));
+  // And a relative path that does lead out is still refused from there.
+  write_text(d / "jobs.yaml", "jobs:\n  - name: a\n    input: cube.stl\n    size: 10\n    output: {vtu: ../b.vtu}\n");
+  EXPECT_EQ(kdmesh::test::run_kdmesh("batch jobs.yaml -q", tmpdir(), "cd '" + d.string() + "' &&").code, 3);
+  EXPECT_FALSE(fs::exists(d.parent_path() / "b.vtu"));
+}
+
 TEST(OutputsNeverClobber, BatchOutputsStayInsideOutDir) {
   const fs::path d = fresh("escape");
   fs::create_directories(d / "cfg" / "out");

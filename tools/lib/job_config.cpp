@@ -282,9 +282,13 @@ class Loader {
     const fs::path rel = p.lexically_normal();
     if (rel.empty() || *rel.begin() == ".." || rel.filename().empty() || rel == ".")
       fail(v, what + ": '" + p.string() + "' leads outside the output directory" + allow);
-    std::error_code e1, e2;  // a symbolic link inside the directory may still lead out
-    const fs::path cdir = fs::weakly_canonical(dir, e1), cfull = fs::weakly_canonical(full, e2);
-    if (!e1 && !e2) {
+    // A symbolic link inside the directory may still lead out. Both made absolute first: the
+    // weakly canonical form of a relative path that does not exist yet stays relative, so
+    // `kdmesh batch jobs.yaml` run in the YAML's own folder refused every new output.
+    std::error_code e1, e2, e3, e4;
+    const fs::path adir = fs::absolute(dir, e3), afull = fs::absolute(full, e4);
+    const fs::path cdir = fs::weakly_canonical(adir, e1), cfull = fs::weakly_canonical(afull, e2);
+    if (!e1 && !e2 && !e3 && !e4) {
       const fs::path r = cfull.lexically_relative(cdir);
       if (r.empty() || *r.begin() == "..")
         fail(v, what + ": '" + p.string() + "' leads outside the output directory through a symbolic link" +
