@@ -221,6 +221,12 @@ std::uint32_t ImproveTets::add_interior_node(const double* p, float h) {
   return std::uint32_t(nodes_->size_count() - 1);
 }
 
+std::uint32_t ImproveTets::add_surface_node(const double* p, std::uint32_t facet, float h) {
+  nodes_->push_back(p, NodeKind::surface, facet, h);
+  vtet_.push_back(kImproveNone);
+  return std::uint32_t(nodes_->size_count() - 1);
+}
+
 bool ImproveTets::remove(std::uint32_t t, std::uint32_t may_orphan) {
   const std::uint32_t* tv = &tv_[4 * std::size_t(t)];
   // Each vertex w of t needs a neighbour tet (across a face of t holding w) to stand for it.

@@ -4,6 +4,7 @@
 #include "mesher/mesh_improve.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <queue>
@@ -14,7 +15,9 @@
 #include "core/timer.h"
 #include "mesher/improve_caps.h"
 #include "mesher/improve_flips.h"
+#include "mesher/improve_insert.h"
 #include "mesher/improve_split.h"
+#include "mesher/improve_split_boundary.h"
 #include "mesher/improve_quality.h"
 #include "mesher/improve_smooth.h"
 #include "mesher/improve_tets.h"
@@ -280,9 +283,35 @@ std::size_t cap_pass(ImproveTets& m, SineCache& cache, double threshold, const B
   return removed;
 }
 
+struct SplitCounts {
+  std::size_t interior = 0, boundary = 0, inserted = 0;
+};
+
+/// Splits tet t's longest boundary edge that split_boundary_edge accepts (longest first, ties
+/// by position in t). Returns true if one was split.
+bool split_a_boundary_edge(ImproveTets& m, std::uint32_t t, int max_ring, const BoundaryContext& ctx,
+                           std::vector<std::uint32_t>& created) {
+  static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  std::array<std::pair<double, int>, 6> by_length;
+  for (int e = 0; e < 6; ++e) {
+    const double *a = m.p(m.v(t)[kEdge[e][0]]), *b = m.p(m.v(t)[kEdge[e][1]]);
+    by_length[e] = {-((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2])), e};
+  }
+  std::sort(by_length.begin(), by_length.end());
+  for (const auto& [neg_len2, e] : by_length) {
+    const std::uint32_t a = m.v(t)[kEdge[e][0]], b = m.v(t)[kEdge[e][1]];
+    if (split_boundary_edge(m, t, a, b, max_ring, ctx, &created)) return true;
+  }
+  return false;
+}
+
 /// Splits every tet below `threshold` with three or four vertices on the surface (the
-/// smoothing cannot move those apart; worst first, ties by id). Returns how many were split.
-std::size_t split_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring) {
+/// smoothing cannot move those apart; worst first, ties by id): an interior edge through a new
+/// interior node (split_sliver); failing that, a boundary edge through a new surface node
+/// (split_boundary_edge, when `boundary` is given); failing that, the tet and its neighbours
+/// are replaced by a fan around a new interior node (insert_in_cavity). Returns the counts.
+SplitCounts split_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring,
+                       const BoundaryContext* boundary) {
   std::vector<std::pair<double, std::uint32_t>> bad;
   const NodeSet& nodes = m.nodes();
   for (std::uint32_t t = 0; t < m.capacity(); ++t) {
@@ -293,16 +322,23 @@ std::size_t split_pass(ImproveTets& m, SineCache& cache, double threshold, int m
     if (on_surface >= 3) bad.push_back({cache.q()[t], t});
   }
   std::sort(bad.begin(), bad.end());
-  std::size_t splits = 0;
+  SplitCounts n;
   std::vector<std::uint32_t> created;
   for (const auto& [q, t] : bad) {
     if (!m.alive(t) || !(cache.q()[t] < threshold)) continue;
-    if (!split_sliver(m, t, max_ring, nullptr, &created)) continue;
-    ++splits;
-    for (std::uint32_t n : created) cache.refresh(n);
+    if (split_sliver(m, t, max_ring, nullptr, &created)) {
+      ++n.interior;
+    } else if (boundary && split_a_boundary_edge(m, t, max_ring, *boundary, created)) {
+      ++n.boundary;
+    } else if (insert_in_cavity(m, t, &created)) {
+      ++n.inserted;
+    } else {
+      continue;
+    }
+    for (std::uint32_t c : created) cache.refresh(c);
   }
-  if (splits) cache.refresh_all();  // the dead slots of the split rings
-  return splits;
+  if (n.interior + n.boundary + n.inserted) cache.refresh_all();  // the dead slots of the split rings
+  return n;
 }
 
 }  // namespace
@@ -328,8 +364,8 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
     s.operations = ops;
     s.seconds = seconds;
     st.stages.push_back(s);
-    if (options.progress)
-      options.progress("improve", double(st.stages.size()) / double(total_stages));
+    if (options.progress)  // extra rounds (max_rounds) hold below 1 until the end
+      options.progress("improve", std::min(double(st.stages.size()), double(total_stages - 1)) / double(total_stages));
     sw.reset();
   };
   stage("input", 0);  // its time: building the adjacency
@@ -359,9 +395,29 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
   }
   ctx.on_surface = 1e-11 * diag;
   const BoundaryContext* flip_boundary = options.flip_boundary ? &boundary : nullptr;
+  const BoundaryContext* split_boundary = options.split_boundary ? &boundary : nullptr;
   const double cap_threshold = options.cap_angle > 0 ? deg_to_sine(options.cap_angle) : -1;
-  for (int r = 0; r < options.rounds; ++r) {
+  // Rounds beyond `rounds` continue while the tets below the target keep getting fewer: until
+  // none is left, or two rounds in a row found no new low (the count is not monotone: the
+  // handle at diag/20 went 111, 90, 67, 71, 59, ... 3, 0 over rounds 4 to 16).
+  const double target = deg_to_sine(options.target_angle);
+  std::size_t fewest = std::numeric_limits<std::size_t>::max();
+  int stalled = 0;
+  const int max_rounds = options.rounds > 0 ? std::max(options.rounds, options.max_rounds) : 0;
+  for (int r = 0; r < max_rounds; ++r) {
+    if (r >= options.rounds) {
+      std::size_t below = 0;
+      for (double q : cache.q()) below += q < target;
+      if (below == 0) break;
+      if (below < fewest) {
+        fewest = below;
+        stalled = 0;
+      } else if (++stalled == 2) {
+        break;
+      }
+    }
     const std::string n = std::to_string(r + 1);
+    st.rounds = r + 1;
     std::size_t ops = flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
     if (cap_threshold > 0) {
       const std::size_t removed = cap_pass(m, cache, cap_threshold, boundary);
@@ -369,9 +425,11 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
       if (removed) ops += removed + flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
     }
     if (options.split_angle > 0) {
-      const std::size_t split = split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring);
-      st.splits += split;
-      ops += split;
+      const SplitCounts split = split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary);
+      st.splits += split.interior;
+      st.boundary_splits += split.boundary;
+      st.insertions += split.inserted;
+      ops += split.interior + split.boundary + split.inserted;
     }
     stage("flip " + n, ops);
     if (r < options.relax_rounds) {
@@ -398,13 +456,16 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
       ops += removed;
     }
     if (options.split_angle > 0) {
-      const std::size_t split = split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring);
-      st.splits += split;
-      ops += split;
+      const SplitCounts split = split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary);
+      st.splits += split.interior;
+      st.boundary_splits += split.boundary;
+      st.insertions += split.inserted;
+      ops += split.interior + split.boundary + split.inserted;
     }
     if (ops) ops += flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
     stage("final", ops);
   }
+  if (options.progress) options.progress("improve", 1.0);
   st.edge_removals = c.edge_removals;
   st.face_removals = c.face_removals;
   st.boundary_flips = c.boundary_flips;

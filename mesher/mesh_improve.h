@@ -21,6 +21,12 @@ struct ImproveOptions {
   double work_angle = 30;
   double smooth_angle = 25;       ///< vertices of tets below it are smoothed
   int rounds = 3;                 ///< rounds of flips, [relaxation,] smoothing
+  /// More rounds, up to this many in all, while tets below target_angle remain (by tet_sine:
+  /// min dihedral under it, or max dihedral over 165 deg for 12) and their count keeps
+  /// reaching new lows (stopping after two rounds without one). The handle at diag/20 had 111
+  /// such tets after 3 rounds and none after 15 (min dihedral 5.1 -> 13.4 deg).
+  int max_rounds = 20;
+  double target_angle = 12;
   int relax_rounds = 1;           ///< of those, the first ones also relax vertices (mean quality)
   double relax_below = 0.7;       ///< ... of tets whose radius ratio is below this
   int max_ring = 10;              ///< largest edge ring tried by edge removal
@@ -38,6 +44,15 @@ struct ImproveOptions {
   /// cannot move apart) get a new interior node on their longest interior edge
   /// (mesher/improve_split.h); 0 = never (no node is then added).
   double split_angle = 12;
+  /// ... and where no interior edge of such a tet can be split, its longest boundary edge that
+  /// is no feature edge and at least the local size long gets a new surface node at the
+  /// surface point closest to its midpoint (mesher/improve_split_boundary.h; new faces within
+  /// hausdorff_tolerance). Long boundary edges are chords the Delaunay tets drew over nearly
+  /// coplanar surface nodes (handle.ply's faceted cylinder: faces 10-23 h long). Where neither
+  /// split applies, the tet and its neighbours become a fan around a new interior node
+  /// (mesher/improve_insert.h: caps folded along feature edges, whose four feature nodes
+  /// cannot move; triceratops.ply went from 4.6 to 9.1 deg).
+  bool split_boundary = true;
   /// Faces a cap removal exposes must lie within 0.8 x this many local sizes of the surface
   /// (the mesh check's tolerance, with the mesher's margin).
   double hausdorff_tolerance = 0.1;
@@ -71,6 +86,9 @@ struct ImproveStats {
   std::size_t boundary_flips = 0;    ///< boundary edges flipped within the surface
   std::size_t caps_removed = 0;      ///< boundary caps taken out of the domain
   std::size_t splits = 0;            ///< sliver edges split (interior nodes added)
+  std::size_t boundary_splits = 0;   ///< long boundary edges split (surface nodes added)
+  std::size_t insertions = 0;        ///< slivers replaced by a fan around a new interior node
+  int rounds = 0;                    ///< rounds run (rounds .. max_rounds)
   std::size_t boundary_changes = 0;  ///< boundary faces replaced (0: the boundary list is unchanged)
   double seconds = 0;
 };
@@ -80,7 +98,7 @@ struct ImproveStats {
 /// patches or within the tolerance on curved ones, feature nodes never move; the boundary face
 /// list changes only where a cap is taken out or a boundary edge flipped, and then within the
 /// tolerance of the local size `sizing` gives; boundary_tet is recomputed); regions are kept;
-/// nodes are added only by sliver splits; the result depends only on the input and the
+/// nodes are added only by sliver and boundary-edge splits; the result depends only on the input and the
 /// options (not on the thread count: the pass makes no random choice). Throws UsageError for
 /// bad options.
 ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,

@@ -15,8 +15,10 @@
 #include "core/rng.h"
 #include "mesher/improve_boundary.h"
 #include "mesher/improve_flips.h"
+#include "mesher/improve_insert.h"
 #include "mesher/improve_quality.h"
 #include "mesher/improve_smooth.h"
+#include "mesher/improve_split_boundary.h"
 #include "mesher/improve_tets.h"
 #include "mesher/mesh_check.h"
 #include "mesher/mesh_improve.h"
@@ -282,30 +284,43 @@ TEST(ImproveTets, OpenEdgeRingAndABoundaryChangingReplace) {
   EXPECT_EQ(m.live(), 4u);
 }
 
+/// The cube [0,1] x [0,1] x [-1,0] (z = 0 the top), prepared, with its query, a constant size
+/// `h` and its 12 feature edges: what the boundary operations of the pass consult.
+struct CubeContext {
+  PreparedSurface surface;
+  std::unique_ptr<SurfaceQuery> query;
+  SizingField sizing;
+  FeatureEdges features;
+  BoundaryContext ctx;
+  explicit CubeContext(double h) {
+    SurfaceMesh cube;
+    for (int i = 0; i < 8; ++i) cube.points.push_back(i & 1, (i >> 1) & 1, -((i >> 2) & 1));
+    // Outward faces of [0,1] x [0,1] x [-1,0].
+    for (std::uint32_t t : {0u, 3u, 1u, 0u, 2u, 3u, 4u, 5u, 7u, 4u, 7u, 6u, 0u, 1u, 5u, 0u, 5u, 4u,
+                            2u, 6u, 7u, 2u, 7u, 3u, 0u, 4u, 6u, 0u, 6u, 2u, 1u, 3u, 7u, 1u, 7u, 5u})
+      cube.tris.push_back(t);
+    surface = prepare_surface(std::move(cube), "cube");
+    query = std::make_unique<SurfaceQuery>(surface.mesh);
+    SizingOptions so;
+    so.max_size = h;
+    sizing = build_sizing_field(surface.mesh, so);
+    features = detect_sharp_edges(surface.mesh, 30);
+    ctx.surface = &surface;
+    ctx.query = query.get();
+    ctx.sizing = &sizing;
+    ctx.features = &features;
+  }
+};
+
 // An edge between two feature nodes is kept as a feature edge unless it is a chord of the
 // feature curve: helmet.ply at diag/40 had a boundary face from one rim node to another 17
 // rim nodes on (over a 11 deg bend of the rim), under a stack of 0.01 deg tets, and no cap or
 // flip could take that edge. On the unit cube's edge y = z = 0 (a feature edge), a and b are
 // corners; c, a node of that curve 0.01 off it, lies between them: ab is a chord, ac is not.
 TEST(ImproveBoundary, RegressionHelmetChordOfAFeatureCurveIsNoFeatureEdge) {
-  SurfaceMesh cube;
-  for (int i = 0; i < 8; ++i) cube.points.push_back(i & 1, (i >> 1) & 1, -((i >> 2) & 1));
-  // Outward faces of [0,1] x [0,1] x [-1,0] (z = 0 is the top).
-  for (std::uint32_t t : {0u, 3u, 1u, 0u, 2u, 3u, 4u, 5u, 7u, 4u, 7u, 6u, 0u, 1u, 5u, 0u, 5u, 4u,
-                          2u, 6u, 7u, 2u, 7u, 3u, 0u, 4u, 6u, 0u, 6u, 2u, 1u, 3u, 7u, 1u, 7u, 5u})
-    cube.tris.push_back(t);
-  const PreparedSurface surface = prepare_surface(std::move(cube), "cube");
-  ASSERT_GT(surface.volume, 0);
-  const SurfaceQuery query(surface.mesh);
-  SizingOptions so;
-  so.max_size = 0.5;
-  const SizingField sizing = build_sizing_field(surface.mesh, so);
-  const FeatureEdges features = detect_sharp_edges(surface.mesh, 30);
-  BoundaryContext ctx;
-  ctx.surface = &surface;
-  ctx.query = &query;
-  ctx.sizing = &sizing;
-  ctx.features = &features;
+  const CubeContext cc(0.5);
+  ASSERT_GT(cc.surface.volume, 0);
+  const BoundaryContext& ctx = cc.ctx;
   NodeSet n;
   auto add = [&](double x, double y, double z, NodeKind k) {
     const double p[3] = {x, y, z};
@@ -330,6 +345,82 @@ TEST(ImproveBoundary, RegressionHelmetChordOfAFeatureCurveIsNoFeatureEdge) {
   EXPECT_TRUE(keeps_feature(m, a, c, ctx));
   EXPECT_TRUE(keeps_feature(m, c, b, ctx));
   EXPECT_FALSE(keeps_feature(m, d, e, ctx));
+}
+
+// A long boundary edge is a chord the Delaunay tets drew over nearly coplanar surface nodes
+// (handle.ply at diag/20: boundary faces 10-23 h long, slivers on them). On the cube's top,
+// the diagonal ab of the quadrilateral a c b d (c and d 0.1 from its midpoint: both triangles
+// have an angle of 160 deg) over an interior node e under c (a 160 deg dihedral at ce): split
+// at the surface point closest to its midpoint, the four tets are better, the volume and the covered part of the top are the same.
+// Refused where it would not help or not be allowed: an edge shorter than the size, a feature
+// edge, or a ring that gets no better.
+TEST(ImproveSplitBoundary, LongBoundaryEdgeGetsASurfaceNodeOnTheSurface) {
+  const CubeContext cc(0.5);
+  NodeSet n;
+  auto add = [&](double x, double y, double z, NodeKind k) {
+    const double p[3] = {x, y, z};
+    n.push_back(p, k, kNoFacet, 0.5f);
+    return std::uint32_t(n.size_count() - 1);
+  };
+  const std::uint32_t a = add(0.1, 0.1, 0, NodeKind::surface), b = add(0.9, 0.9, 0, NodeKind::surface),
+                      c = add(0.57, 0.43, 0, NodeKind::surface), d = add(0.43, 0.57, 0, NodeKind::surface),
+                      e = add(0.57, 0.43, -0.3, NodeKind::interior);
+  std::vector<std::uint32_t> tets = positive(n, a, b, c, e);
+  const auto t2 = positive(n, a, b, d, e);
+  tets.insert(tets.end(), t2.begin(), t2.end());
+  const double worst_before = std::min(tet_sine(n.points.p(tets[0]), n.points.p(tets[1]), n.points.p(tets[2]), n.points.p(tets[3])),
+                                       tet_sine(n.points.p(tets[4]), n.points.p(tets[5]), n.points.p(tets[6]), n.points.p(tets[7])));
+  {
+    // The same edge with a size longer than it: refused, nothing changed.
+    const CubeContext coarse(2.0);
+    NodeSet copy = n;
+    ImproveTets m(copy, tets, {0, 0});
+    EXPECT_FALSE(split_boundary_edge(m, 0, a, b, 10, coarse.ctx));
+    EXPECT_EQ(m.live(), 2u);
+    EXPECT_EQ(copy.size_count(), 5u);
+  }
+  ImproveTets m(n, tets, {0, 0});
+  EXPECT_FALSE(split_boundary_edge(m, 0, a, e, 10, cc.ctx));  // not a boundary edge
+  std::vector<std::uint32_t> created;
+  ASSERT_TRUE(split_boundary_edge(m, 0, a, b, 10, cc.ctx, &created));
+  expect_consistent(m);
+  ASSERT_EQ(m.live(), 4u);
+  ASSERT_EQ(n.size_count(), 6u);
+  const std::uint32_t x = 5;
+  EXPECT_EQ(n.kind[x], NodeKind::surface);
+  ASSERT_NE(n.facet[x], kNoFacet);
+  EXPECT_NEAR(n.points.p(x)[0], 0.5, 1e-15);
+  EXPECT_NEAR(n.points.p(x)[1], 0.5, 1e-15);
+  EXPECT_EQ(n.points.p(x)[2], 0.0);  // on the top face
+  double volume = 0, worst_after = 1;
+  std::size_t on_top = 0;
+  for (std::uint32_t t : created) {
+    const std::uint32_t* v = m.v(t);
+    volume += signed_volume(n, v);
+    worst_after = std::min(worst_after, tet_sine(m.p(v[0]), m.p(v[1]), m.p(v[2]), m.p(v[3])));
+    for (int f = 0; f < 4; ++f) on_top += m.adj(t, f) == kImproveNone && v[f] == e;
+  }
+  EXPECT_NEAR(volume, signed_volume(n, &tets[0]) + signed_volume(n, &tets[4]), 1e-15);
+  EXPECT_EQ(on_top, 4u);  // a c x, x c b, a x d, x b d: the faces opposite e, all on the top
+  EXPECT_GT(worst_after, worst_before);
+  // Splitting a half again would make its ring worse: refused.
+  for (std::uint32_t t : created) EXPECT_FALSE(split_boundary_edge(m, t, a, x, 10, cc.ctx));
+  // A feature edge (the cube's edge y = z = 0) is never split this way.
+  NodeSet f;
+  auto addf = [&](double px, double py, double pz, NodeKind k) {
+    const double p[3] = {px, py, pz};
+    f.push_back(p, k, kNoFacet, 0.5f);
+    return std::uint32_t(f.size_count() - 1);
+  };
+  const std::uint32_t fa = addf(0, 0, 0, NodeKind::corner), fb = addf(1, 0, 0, NodeKind::corner),
+                      fc = addf(0.5, 0.1, 0, NodeKind::surface), fd = addf(0.5, 0, -0.1, NodeKind::surface),
+                      fe = addf(0.5, 0.3, -0.3, NodeKind::interior);
+  std::vector<std::uint32_t> ft = positive(f, fa, fb, fc, fe);
+  const auto ft2 = positive(f, fa, fb, fe, fd);
+  ft.insert(ft.end(), ft2.begin(), ft2.end());
+  ImproveTets fm(f, ft, {0, 0});
+  EXPECT_FALSE(split_boundary_edge(fm, 0, fa, fb, 10, cc.ctx));
+  EXPECT_EQ(fm.live(), 2u);
 }
 
 // When pq misses the face (q moved beyond edge bc), a new tet would be inverted: no flip.
@@ -592,6 +683,54 @@ std::multiset<std::array<std::uint32_t, 3>> boundary_set(const VolumeMesh& vm) {
   return s;
 }
 
+// Node insertion: on the graded cube's Delaunay mesh, the 20 worst tets are replaced with
+// their neighbours by a fan around a new interior node where one beats the sliver; each fan
+// is valid, and the volume and the boundary faces are unchanged.
+TEST(ImproveInsert, SliverAndItsNeighboursBecomeAFanAroundANewNode) {
+  Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.15, 0.0);
+  const std::size_t nodes_before = p.mesh.nodes.size_count();
+  ImproveTets m(p.mesh.nodes, p.mesh.tets, p.mesh.tet_region);
+  m.inside_query = p.query.get();
+  std::vector<std::pair<double, std::uint32_t>> worst;
+  for (std::uint32_t t = 0; t < m.capacity(); ++t) {
+    const std::uint32_t* v = m.v(t);
+    worst.push_back({tet_sine(m.p(v[0]), m.p(v[1]), m.p(v[2]), m.p(v[3])), t});
+  }
+  std::sort(worst.begin(), worst.end());
+  ASSERT_GE(worst.size(), 20u);
+  ASSERT_LT(worst[0].first, std::sin(5 * kPi / 180));  // slivers to replace
+  const double volume_before = total_volume(p.mesh);
+  std::size_t inserted = 0;
+  std::vector<std::uint32_t> created;
+  for (std::size_t k = 0; k < 20; ++k) {
+    const auto [q, t] = worst[k];
+    if (!m.alive(t)) continue;
+    created.clear();
+    if (!insert_in_cavity(m, t, &created)) continue;
+    ++inserted;
+    // The fan: every new tet holds the new node, and the worst of them beats the sliver.
+    const std::uint32_t x = std::uint32_t(m.nodes().size_count() - 1);
+    EXPECT_EQ(m.nodes().kind[x], NodeKind::interior);
+    double fan_worst = 1;
+    for (std::uint32_t c : created) {
+      const std::uint32_t* v = m.v(c);
+      EXPECT_GE(index_in(v, x), 0);
+      fan_worst = std::min(fan_worst, tet_sine(m.p(v[0]), m.p(v[1]), m.p(v[2]), m.p(v[3])));
+    }
+    EXPECT_GT(fan_worst, q);
+  }
+  EXPECT_GT(inserted, 0u);
+  expect_consistent(m);
+  const auto bset = boundary_set(p.mesh);
+  VolumeMesh& vm = p.mesh;
+  EXPECT_EQ(m.write_back(vm), 0u);  // no boundary face changed
+  EXPECT_EQ(boundary_set(vm), bset);
+  EXPECT_EQ(vm.nodes.size_count(), nodes_before + inserted);
+  EXPECT_NEAR(total_volume(vm), volume_before, 1e-12);
+  const MeshCheck c = check_volume_mesh(vm, p.surface, *p.query, p.sizing);
+  EXPECT_TRUE(c.ok()) << failures(c);
+}
+
 // The unit cube, graded towards a corner (sizes 0.0375 .. 0.15): every property the pass
 // promises, on a mesh with slivers.
 // The certificate of ImproveTets::inside_ok_moved (a known-inside centroid carried along a
@@ -741,6 +880,46 @@ TEST(MeshImprove, GradedCubeKeepsEveryInvariantAndRaisesTheWorstAngle) {
     EXPECT_EQ(again.tet_region, vm.tet_region);
     EXPECT_EQ(again.boundary_tet, vm.boundary_tet);
   }
+}
+
+// Three rounds left handle.ply at diag/20 with 111 tets below the targets (min dihedral 5.1
+// deg); rounds go on now while such tets remain and their count reaches new lows (15 rounds,
+// none left, 13.4 deg). The mechanism, on the graded cube with a target of 35 deg (which one
+// round of flips and smoothing leaves tets below): further rounds get strictly fewer, and
+// stop by themselves before max_rounds.
+TEST(MeshImprove, RegressionHandleRoundsGoOnWhileTetsBelowTheTargetGetFewer) {
+  constexpr double kTarget = 35;
+  auto below_target = [](const VolumeMesh& vm) {
+    std::size_t n = 0;
+    for (std::size_t t = 0; t < vm.num_tets(); ++t) {
+      const std::uint32_t* v = &vm.tets[4 * t];
+      n += tet_sine(vm.nodes.points.p(v[0]), vm.nodes.points.p(v[1]), vm.nodes.points.p(v[2]),
+                    vm.nodes.points.p(v[3])) < std::sin(kTarget * kPi / 180);
+    }
+    return n;
+  };
+  Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.15, 0.0);
+  ImproveOptions o;
+  o.rounds = 1;
+  o.max_rounds = 1;
+  o.target_angle = kTarget;
+  VolumeMesh one = p.mesh;
+  const ImproveStats s1 = improve_mesh(one, p.surface, *p.query, p.sizing, o);
+  EXPECT_EQ(s1.rounds, 1);
+  const std::size_t after_one = below_target(one);
+  ASSERT_GT(after_one, 0u);  // what further rounds are for
+  o.max_rounds = 40;
+  VolumeMesh more = p.mesh;
+  const ImproveStats s2 = improve_mesh(more, p.surface, *p.query, p.sizing, o);
+  EXPECT_GT(s2.rounds, 1);
+  EXPECT_LT(s2.rounds, 40);
+  EXPECT_LT(below_target(more), after_one);
+  const MeshCheck c = check_volume_mesh(more, p.surface, *p.query, p.sizing);
+  EXPECT_TRUE(c.ok()) << failures(c);
+  o.rounds = 0;  // no rounds at all: the mesh is left as it is, whatever max_rounds says
+  VolumeMesh none = p.mesh;
+  EXPECT_EQ(improve_mesh(none, p.surface, *p.query, p.sizing, o).rounds, 0);
+  EXPECT_EQ(tet_sets(none.tets), tet_sets(p.mesh.tets));
 }
 
 // Two disjoint boxes: two regions, each keeps its tets and volume; the boundary face set is

@@ -464,6 +464,8 @@ Meshed mesh_with_refinement(const MeshJob& job, const PreparedSurface& surface, 
       j["improve"] = {{"edge_removals", imp.edge_removals}, {"face_removals", imp.face_removals},
                       {"relaxed", imp.relaxed}, {"smoothed", imp.smoothed},
                       {"boundary_changes", imp.boundary_changes}, {"caps_removed", imp.caps_removed}, {"splits", imp.splits},
+                      {"boundary_splits", imp.boundary_splits}, {"insertions", imp.insertions},
+                      {"rounds", imp.rounds},
                       {"boundary_flips", imp.boundary_flips}};
     }
 

@@ -1,0 +1,117 @@
+// kdmesh — node insertion of the quality-improvement pass (mesher/improve_insert.h).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/improve_insert.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "mesher/improve_quality.h"
+
+namespace kdmesh {
+
+namespace {
+
+constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};  // outward
+
+/// The worst tet_sine of the fan of x over `faces` (3 ids per face, outward of the cavity),
+/// -1 if a tet of it is not valid.
+double fan_quality(const ImproveTets& m, const std::vector<std::uint32_t>& faces, const double* x) {
+  double worst = 1;
+  for (std::size_t k = 0; k < faces.size(); k += 3) {
+    // The outward face (p, q, r) with x inside: the tet (p, r, q, x) is positive.
+    const std::uint32_t ids[4] = {faces[k], faces[k + 2], faces[k + 1], faces[k + 1]};
+    const double* p[4] = {m.p(faces[k]), m.p(faces[k + 2]), m.p(faces[k + 1]), x};
+    // inside_ok counts surface vertices by id: the face's own vertex stands for x (interior
+    // x can only make that test be asked less often).
+    if (!tet_valid(p[0], p[1], p[2], p[3]) || !m.inside_ok(ids, p)) return -1;
+    worst = std::min(worst, tet_sine(p));
+  }
+  return worst;
+}
+
+/// Tries one cavity (`cavity`, its tets; region checked by the caller).
+bool insert_into(ImproveTets& m, const std::vector<std::uint32_t>& cavity,
+                 std::vector<std::uint32_t>* created) {
+  static thread_local std::vector<std::uint32_t> faces, verts, fresh;
+  faces.clear();
+  verts.clear();
+  double worst_old = 1;
+  for (std::uint32_t c : cavity) {
+    const std::uint32_t* v = m.v(c);
+    worst_old = std::min(worst_old, tet_sine(m.p(v[0]), m.p(v[1]), m.p(v[2]), m.p(v[3])));
+    verts.insert(verts.end(), v, v + 4);
+    for (int f = 0; f < 4; ++f) {
+      const std::uint32_t r = m.adj(c, f);
+      if (r != kImproveNone && std::find(cavity.begin(), cavity.end(), r >> 2) != cavity.end()) continue;
+      faces.insert(faces.end(), {v[kFace[f][0]], v[kFace[f][1]], v[kFace[f][2]]});
+    }
+  }
+  std::sort(verts.begin(), verts.end());
+  verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+  for (std::uint32_t w : verts)
+    if (std::find(faces.begin(), faces.end(), w) == faces.end()) return false;  // it would be lost
+  // Candidates: the centroids of the cavity's vertices and of each cavity tet.
+  double best_x[3] = {0, 0, 0}, best_q = -1, scale = 0;
+  auto consider = [&](const double* x) {
+    const double q = fan_quality(m, faces, x);
+    if (q > best_q) best_q = q, std::copy_n(x, 3, best_x);
+  };
+  {
+    double c[3] = {0, 0, 0};
+    for (std::uint32_t w : verts)
+      for (int k = 0; k < 3; ++k) c[k] += m.p(w)[k] / double(verts.size());
+    for (std::uint32_t w : verts)
+      for (int k = 0; k < 3; ++k) scale = std::max(scale, std::abs(m.p(w)[k] - c[k]));
+    consider(c);
+  }
+  for (std::uint32_t cv : cavity) {
+    const std::uint32_t* v = m.v(cv);
+    const double* p[4] = {m.p(v[0]), m.p(v[1]), m.p(v[2]), m.p(v[3])};
+    double c[3];
+    ImproveTets::centroid(p, c);
+    consider(c);
+  }
+  if (!(best_q > 0)) return false;
+  // Compass search: the six axis moves of `step`, halved when none is better.
+  int evaluations = 0;  // a bound on the work: the moves only ever raise best_q
+  for (double step = 0.25 * scale; step > 1e-3 * scale && evaluations < 300;) {
+    bool moved = false;
+    for (int k = 0; k < 6 && !moved; ++k) {
+      double x[3] = {best_x[0], best_x[1], best_x[2]};
+      x[k / 2] += k % 2 ? -step : step;
+      const double q = fan_quality(m, faces, x);
+      ++evaluations;
+      if (q > best_q) best_q = q, std::copy_n(x, 3, best_x), moved = true;
+    }
+    if (!moved) step /= 2;
+  }
+  if (!(best_q > worst_old)) return false;
+  float h = 0;
+  for (std::uint32_t w : verts) h += m.nodes().size[w] / float(verts.size());
+  const std::uint32_t x = m.add_interior_node(best_x, h);
+  fresh.clear();
+  for (std::size_t k = 0; k < faces.size(); k += 3) fresh.insert(fresh.end(), {faces[k], faces[k + 2], faces[k + 1], x});
+  return m.replace(cavity, fresh, created);  // on false the node stays unused; write_back drops it
+}
+
+}  // namespace
+
+bool insert_in_cavity(ImproveTets& m, std::uint32_t t, std::vector<std::uint32_t>* created) {
+  if (!m.alive(t)) return false;
+  // Layer 1: t and its face neighbours; layer 2: and theirs (same region, across interior faces).
+  static thread_local std::vector<std::uint32_t> cavity;
+  cavity.assign(1, t);
+  for (int layer = 0; layer < 2; ++layer) {
+    const std::size_t n = cavity.size();
+    for (std::size_t i = 0; i < n; ++i)
+      for (int f = 0; f < 4; ++f) {
+        const std::uint32_t r = m.adj(cavity[i], f);
+        if (r == kImproveNone || m.region(r >> 2) != m.region(t)) continue;
+        if (std::find(cavity.begin(), cavity.end(), r >> 2) == cavity.end()) cavity.push_back(r >> 2);
+      }
+    if (insert_into(m, cavity, created)) return true;
+  }
+  return false;
+}
+
+}  // namespace kdmesh
