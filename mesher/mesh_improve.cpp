@@ -311,7 +311,7 @@ bool split_a_boundary_edge(ImproveTets& m, std::uint32_t t, int max_ring, const 
 /// (split_boundary_edge, when `boundary` is given); failing that, the tet and its neighbours
 /// are replaced by a fan around a new interior node (insert_in_cavity). Returns the counts.
 SplitCounts split_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring,
-                       const BoundaryContext* boundary) {
+                       const BoundaryContext* boundary, bool insert, bool any_tet = false) {
   std::vector<std::pair<double, std::uint32_t>> bad;
   const NodeSet& nodes = m.nodes();
   for (std::uint32_t t = 0; t < m.capacity(); ++t) {
@@ -319,18 +319,23 @@ SplitCounts split_pass(ImproveTets& m, SineCache& cache, double threshold, int m
     const std::uint32_t* v = m.v(t);
     int on_surface = 0;
     for (int i = 0; i < 4; ++i) on_surface += nodes.kind[v[i]] != NodeKind::interior;
-    if (on_surface >= 3) bad.push_back({cache.q()[t], t});
+    if (on_surface >= 3 || any_tet) bad.push_back({cache.q()[t], t});
   }
   std::sort(bad.begin(), bad.end());
   SplitCounts n;
   std::vector<std::uint32_t> created;
   for (const auto& [q, t] : bad) {
     if (!m.alive(t) || !(cache.q()[t] < threshold)) continue;
-    if (split_sliver(m, t, max_ring, nullptr, &created)) {
+    int on_surface = 0;
+    for (int i = 0; i < 4; ++i) on_surface += nodes.kind[m.v(t)[i]] != NodeKind::interior;
+    if (on_surface < 3) {  // (any_tet) vertices the smoothing could not move far enough
+      if (!insert || !insert_in_cavity(m, t, &created)) continue;
+      ++n.inserted;
+    } else if (split_sliver(m, t, max_ring, nullptr, &created)) {
       ++n.interior;
     } else if (boundary && split_a_boundary_edge(m, t, max_ring, *boundary, created)) {
       ++n.boundary;
-    } else if (insert_in_cavity(m, t, &created)) {
+    } else if (insert && insert_in_cavity(m, t, &created)) {
       ++n.inserted;
     } else {
       continue;
@@ -398,8 +403,8 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
   const BoundaryContext* split_boundary = options.split_boundary ? &boundary : nullptr;
   const double cap_threshold = options.cap_angle > 0 ? deg_to_sine(options.cap_angle) : -1;
   // Rounds beyond `rounds` continue while the tets below the target keep getting fewer: until
-  // none is left, or two rounds in a row found no new low (the count is not monotone: the
-  // handle at diag/20 went 111, 90, 67, 71, 59, ... 3, 0 over rounds 4 to 16).
+  // none is left, or three rounds in a row found no new low (the count is not monotone: the
+  // handle at diag/20 went 62, 39, 28, 33, 28, 23, 22, 19, 20, 20, 15, 9, 0 over rounds 4-16).
   const double target = deg_to_sine(options.target_angle);
   std::size_t fewest = std::numeric_limits<std::size_t>::max();
   int stalled = 0;
@@ -412,7 +417,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
       if (below < fewest) {
         fewest = below;
         stalled = 0;
-      } else if (++stalled == 2) {
+      } else if (++stalled == 3) {
         break;
       }
     }
@@ -425,7 +430,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
       if (removed) ops += removed + flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
     }
     if (options.split_angle > 0) {
-      const SplitCounts split = split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary);
+      const SplitCounts split = split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary, options.insert_nodes);
       st.splits += split.interior;
       st.boundary_splits += split.boundary;
       st.insertions += split.inserted;
@@ -456,7 +461,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
       ops += removed;
     }
     if (options.split_angle > 0) {
-      const SplitCounts split = split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary);
+      const SplitCounts split = split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary, options.insert_nodes, /*any_tet=*/true);
       st.splits += split.interior;
       st.boundary_splits += split.boundary;
       st.insertions += split.inserted;

@@ -284,6 +284,13 @@ TEST(ImproveTets, OpenEdgeRingAndABoundaryChangingReplace) {
   EXPECT_EQ(m.live(), 4u);
 }
 
+/// Appends a node of kind k at (x, y, z), size 0.5, to n; returns its id.
+std::uint32_t add_node(NodeSet& n, double x, double y, double z, NodeKind k) {
+  const double p[3] = {x, y, z};
+  n.push_back(p, k, kNoFacet, 0.5f);
+  return std::uint32_t(n.size_count() - 1);
+}
+
 /// The cube [0,1] x [0,1] x [-1,0] (z = 0 the top), prepared, with its query, a constant size
 /// `h` and its 12 feature edges: what the boundary operations of the pass consult.
 struct CubeContext {
@@ -322,11 +329,7 @@ TEST(ImproveBoundary, RegressionHelmetChordOfAFeatureCurveIsNoFeatureEdge) {
   ASSERT_GT(cc.surface.volume, 0);
   const BoundaryContext& ctx = cc.ctx;
   NodeSet n;
-  auto add = [&](double x, double y, double z, NodeKind k) {
-    const double p[3] = {x, y, z};
-    n.push_back(p, k, kNoFacet, 0.5f);
-    return std::uint32_t(n.size_count() - 1);
-  };
+  auto add = [&](double x, double y, double z, NodeKind k) { return add_node(n, x, y, z, k); };
   const std::uint32_t a = add(0, 0, 0, NodeKind::corner), b = add(1, 0, 0, NodeKind::corner),
                       c = add(0.5, 0.01, 0, NodeKind::edge), d = add(0.5, 0.5, 0, NodeKind::surface),
                       e = add(0.5, 0.3, -0.5, NodeKind::interior);
@@ -357,11 +360,7 @@ TEST(ImproveBoundary, RegressionHelmetChordOfAFeatureCurveIsNoFeatureEdge) {
 TEST(ImproveSplitBoundary, LongBoundaryEdgeGetsASurfaceNodeOnTheSurface) {
   const CubeContext cc(0.5);
   NodeSet n;
-  auto add = [&](double x, double y, double z, NodeKind k) {
-    const double p[3] = {x, y, z};
-    n.push_back(p, k, kNoFacet, 0.5f);
-    return std::uint32_t(n.size_count() - 1);
-  };
+  auto add = [&](double x, double y, double z, NodeKind k) { return add_node(n, x, y, z, k); };
   const std::uint32_t a = add(0.1, 0.1, 0, NodeKind::surface), b = add(0.9, 0.9, 0, NodeKind::surface),
                       c = add(0.57, 0.43, 0, NodeKind::surface), d = add(0.43, 0.57, 0, NodeKind::surface),
                       e = add(0.57, 0.43, -0.3, NodeKind::interior);
@@ -407,11 +406,7 @@ TEST(ImproveSplitBoundary, LongBoundaryEdgeGetsASurfaceNodeOnTheSurface) {
   for (std::uint32_t t : created) EXPECT_FALSE(split_boundary_edge(m, t, a, x, 10, cc.ctx));
   // A feature edge (the cube's edge y = z = 0) is never split this way.
   NodeSet f;
-  auto addf = [&](double px, double py, double pz, NodeKind k) {
-    const double p[3] = {px, py, pz};
-    f.push_back(p, k, kNoFacet, 0.5f);
-    return std::uint32_t(f.size_count() - 1);
-  };
+  auto addf = [&](double px, double py, double pz, NodeKind k) { return add_node(f, px, py, pz, k); };
   const std::uint32_t fa = addf(0, 0, 0, NodeKind::corner), fb = addf(1, 0, 0, NodeKind::corner),
                       fc = addf(0.5, 0.1, 0, NodeKind::surface), fd = addf(0.5, 0, -0.1, NodeKind::surface),
                       fe = addf(0.5, 0.3, -0.3, NodeKind::interior);
