@@ -49,11 +49,22 @@ bool face_on_surface(const double* a, const double* b, const double* c, const Bo
 
 bool along_feature(const double* a, const double* b, const BoundaryContext& ctx) {
   if (!ctx.features) return true;
+  double on_curve[3];
+  std::uint32_t facet = kNoFacet;
+  // No facet found: nothing to contradict the edge.
+  return point_on_feature(a, b, ctx, on_curve, &facet) || facet == kNoFacet;
+}
+
+bool point_on_feature(const double* a, const double* b, const BoundaryContext& ctx, double* x,
+                      std::uint32_t* facet_out) {
+  *facet_out = kNoFacet;
+  if (!ctx.features) return false;
   const double m[3] = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
   double cp[3];
   std::uint32_t facet = kNoFacet;
   ctx.query->closest(m, cp, &facet);
-  if (facet == kNoFacet) return true;
+  *facet_out = facet;
+  if (facet == kNoFacet) return false;
   const SurfaceMesh& sm = ctx.surface->mesh;
   const std::vector<std::uint32_t>& fe = ctx.features->edges;  // (lo, hi) pairs, sorted
   const double len2 = (b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) + (b[2] - a[2]) * (b[2] - a[2]);
@@ -66,9 +77,15 @@ bool along_feature(const double* a, const double* b, const BoundaryContext& ctx)
       if (fe[2 * mid] < p || (fe[2 * mid] == p && fe[2 * mid + 1] < q)) lo = mid + 1;
       else hi = mid;
     }
-    if (lo < fe.size() / 2 && fe[2 * lo] == p && fe[2 * lo + 1] == q &&
-        within_tube(m, sm.points.p(p), sm.points.p(q), len2))
+    const double *pp = sm.points.p(p), *pq = sm.points.p(q);
+    if (lo < fe.size() / 2 && fe[2 * lo] == p && fe[2 * lo + 1] == q && within_tube(m, pp, pq, len2)) {
+      // m's closest point on the segment pq.
+      double d[3], t = 0, dd = 0;
+      for (int k = 0; k < 3; ++k) d[k] = pq[k] - pp[k], t += (m[k] - pp[k]) * d[k], dd += d[k] * d[k];
+      t = dd > 0 ? std::clamp(t / dd, 0.0, 1.0) : 0.0;
+      for (int k = 0; k < 3; ++k) x[k] = pp[k] + t * d[k];
       return true;
+    }
   }
   return false;
 }

@@ -34,6 +34,12 @@ bool face_on_surface(const double* a, const double* b, const double* c, const Bo
 /// its length of a feature edge of the facet closest to the midpoint (or no features known).
 bool along_feature(const double* a, const double* b, const BoundaryContext& ctx);
 
+/// The test of along_feature with features known: when the midpoint of (a, b) lies within 5%
+/// of |ab| of a feature edge of the facet closest to it, true, with x the midpoint's closest
+/// point on that feature edge. *facet gets the closest facet (kNoFacet: none found).
+bool point_on_feature(const double* a, const double* b, const BoundaryContext& ctx, double* x,
+                      std::uint32_t* facet);
+
 class ImproveTets;
 
 /// True if the mesh edge (a, b) of m is a feature edge the pass must keep: along_feature holds

@@ -15,9 +15,9 @@ bool split_boundary_edge(ImproveTets& m, std::uint32_t t, std::uint32_t a, std::
   if (!m.alive(t) || !ctx.query || !ctx.sizing) return false;
   const NodeSet& nodes = m.nodes();
   if (nodes.kind[a] == NodeKind::interior || nodes.kind[b] == NodeKind::interior) return false;
-  if (nodes.kind[a] != NodeKind::surface && nodes.kind[b] != NodeKind::surface &&
-      keeps_feature(m, a, b, ctx))
-    return false;  // a feature edge keeps its nodes: only its own sampling could split it
+  // A feature edge is split on its curve: the new node is an edge node.
+  const bool feature = nodes.kind[a] != NodeKind::surface && nodes.kind[b] != NodeKind::surface &&
+                       keeps_feature(m, a, b, ctx);
   static thread_local std::vector<std::uint32_t> ring, tets, fresh;
   if (!m.open_edge_ring(t, a, b, max_ring, ring, tets)) return false;
   const double *pa = m.p(a), *pb = m.p(b);
@@ -27,8 +27,14 @@ bool split_boundary_edge(ImproveTets& m, std::uint32_t t, std::uint32_t a, std::
     len2 += (pb[k] - pa[k]) * (pb[k] - pa[k]);
   }
   std::uint32_t facet = kNoFacet;
-  const double dist = ctx.query->closest(mid, x, &facet);
-  if (facet == kNoFacet || !(dist * dist <= len2 / 16)) return false;
+  if (feature) {
+    if (!point_on_feature(pa, pb, ctx, x, &facet)) return false;
+  } else {
+    ctx.query->closest(mid, x, &facet);
+  }
+  double dist2 = 0;
+  for (int k = 0; k < 3; ++k) dist2 += (x[k] - mid[k]) * (x[k] - mid[k]);
+  if (facet == kNoFacet || !(dist2 <= len2 / 16)) return false;
   const double h = (*ctx.sizing)(x);
   if (!(len2 >= h * h)) return false;  // halves shorter than half the size: not a long edge
   double worst_old = 1;
@@ -58,7 +64,7 @@ bool split_boundary_edge(ImproveTets& m, std::uint32_t t, std::uint32_t a, std::
   if (!face_on_surface(pa, p0, x, ctx) || !face_on_surface(x, p0, pb, ctx) ||
       !face_on_surface(pa, x, pm, ctx) || !face_on_surface(x, pb, pm, ctx))
     return false;
-  const std::uint32_t xi = m.add_surface_node(x, facet, float(h));
+  const std::uint32_t xi = m.add_boundary_node(x, feature ? NodeKind::edge : NodeKind::surface, facet, float(h));
   fresh.clear();
   for (std::size_t k = 0; k < n; ++k) {
     const std::uint32_t r0 = ring[k], r1 = ring[k + 1];

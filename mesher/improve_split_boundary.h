@@ -12,9 +12,10 @@
 namespace kdmesh {
 
 /// Splits the boundary edge (a, b) of tet t: every tet of its open ring is cut in two through
-/// a new surface node x, the point of the input surface closest to the edge's midpoint, and
-/// the edge's two boundary faces become four. Refused (false, nothing changed) when a or b is
-/// interior, (a, b) is a feature edge the mesh keeps (keeps_feature), the edge is shorter than
+/// a new surface node x, the point of the input surface closest to the edge's midpoint (for a
+/// feature edge the mesh keeps, keeps_feature: an edge node, the midpoint's closest point on
+/// the input's feature edge, point_on_feature), and the edge's two boundary faces become four.
+/// Refused (false, nothing changed) when a or b is interior, the edge is shorter than
 /// the size at x, x is farther from the midpoint than a quarter of the edge (another sheet of
 /// the surface), the ring is longer than max_ring, a new tet is not valid (exactly positive,
 /// not flat, ImproveTets::inside_ok), a new boundary face is not on the surface

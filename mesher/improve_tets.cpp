@@ -221,8 +221,8 @@ std::uint32_t ImproveTets::add_interior_node(const double* p, float h) {
   return std::uint32_t(nodes_->size_count() - 1);
 }
 
-std::uint32_t ImproveTets::add_surface_node(const double* p, std::uint32_t facet, float h) {
-  nodes_->push_back(p, NodeKind::surface, facet, h);
+std::uint32_t ImproveTets::add_boundary_node(const double* p, NodeKind kind, std::uint32_t facet, float h) {
+  nodes_->push_back(p, kind, facet, h);
   vtet_.push_back(kImproveNone);
   return std::uint32_t(nodes_->size_count() - 1);
 }

@@ -55,8 +55,8 @@ class ImproveTets {
   /// Appends an interior node at p (target size h) to the node set and returns its id; it is
   /// in no tet until a replace() uses it.
   std::uint32_t add_interior_node(const double* p, float h);
-  /// Appends a surface node at p, a point of surface facet `facet`, likewise.
-  std::uint32_t add_surface_node(const double* p, std::uint32_t facet, float h);
+  /// Appends a surface or edge node (kind) at p, a point of surface facet `facet`, likewise.
+  std::uint32_t add_boundary_node(const double* p, NodeKind kind, std::uint32_t facet, float h);
   /// Removes tet t from the domain: its faces shared with other tets become boundary faces.
   /// Returns false (and changes nothing) if a vertex of t is in no other tet through those
   /// faces (it would be left without a tet), unless that vertex is `may_orphan`: it is then

@@ -355,8 +355,8 @@ TEST(ImproveBoundary, RegressionHelmetChordOfAFeatureCurveIsNoFeatureEdge) {
 // the diagonal ab of the quadrilateral a c b d (c and d 0.1 from its midpoint: both triangles
 // have an angle of 160 deg) over an interior node e under c (a 160 deg dihedral at ce): split
 // at the surface point closest to its midpoint, the four tets are better, the volume and the covered part of the top are the same.
-// Refused where it would not help or not be allowed: an edge shorter than the size, a feature
-// edge, or a ring that gets no better.
+// Refused where it would not help: an edge shorter than the size, or a ring that gets no
+// better. A feature edge is split on its curve.
 TEST(ImproveSplitBoundary, LongBoundaryEdgeGetsASurfaceNodeOnTheSurface) {
   const CubeContext cc(0.5);
   NodeSet n;
@@ -404,7 +404,8 @@ TEST(ImproveSplitBoundary, LongBoundaryEdgeGetsASurfaceNodeOnTheSurface) {
   EXPECT_GT(worst_after, worst_before);
   // Splitting a half again would make its ring worse: refused.
   for (std::uint32_t t : created) EXPECT_FALSE(split_boundary_edge(m, t, a, x, 10, cc.ctx));
-  // A feature edge (the cube's edge y = z = 0) is never split this way.
+  // A feature edge (the cube's edge y = z = 0, between two corners) is split on the curve:
+  // the new node is an edge node, on the cube's edge.
   NodeSet f;
   auto addf = [&](double px, double py, double pz, NodeKind k) { return add_node(f, px, py, pz, k); };
   const std::uint32_t fa = addf(0, 0, 0, NodeKind::corner), fb = addf(1, 0, 0, NodeKind::corner),
@@ -414,8 +415,17 @@ TEST(ImproveSplitBoundary, LongBoundaryEdgeGetsASurfaceNodeOnTheSurface) {
   const auto ft2 = positive(f, fa, fb, fe, fd);
   ft.insert(ft.end(), ft2.begin(), ft2.end());
   ImproveTets fm(f, ft, {0, 0});
-  EXPECT_FALSE(split_boundary_edge(fm, 0, fa, fb, 10, cc.ctx));
-  EXPECT_EQ(fm.live(), 2u);
+  ASSERT_TRUE(keeps_feature(fm, fa, fb, cc.ctx));
+  ASSERT_TRUE(split_boundary_edge(fm, 0, fa, fb, 10, cc.ctx));
+  expect_consistent(fm);
+  EXPECT_EQ(fm.live(), 4u);
+  const std::uint32_t fx = 5;
+  EXPECT_EQ(f.kind[fx], NodeKind::edge);
+  EXPECT_EQ(f.points.p(fx)[1], 0.0);
+  EXPECT_EQ(f.points.p(fx)[2], 0.0);
+  EXPECT_NEAR(f.points.p(fx)[0], 0.5, 1e-15);
+  EXPECT_TRUE(keeps_feature(fm, fa, fx, cc.ctx));  // the curve keeps both halves
+  EXPECT_TRUE(keeps_feature(fm, fx, fb, cc.ctx));
 }
 
 // When pq misses the face (q moved beyond edge bc), a new tet would be inverted: no flip.
