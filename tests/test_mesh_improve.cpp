@@ -921,6 +921,23 @@ TEST(MeshImprove, RegressionHandleRoundsGoOnWhileTetsBelowTheTargetGetFewer) {
   EXPECT_LT(below_target(more), after_one);
   const MeshCheck c = check_volume_mesh(more, p.surface, *p.query, p.sizing);
   EXPECT_TRUE(c.ok()) << failures(c);
+  // The extra rounds, splits and insertions make no thread-dependent choice (split_angle 30:
+  // on this cube nothing is below 12 deg when the split pass runs).
+  ImproveOptions od = o;
+  od.split_angle = 30;
+  VolumeMesh first = p.mesh;
+  od.threads = 1;
+  const ImproveStats sf = improve_mesh(first, p.surface, *p.query, p.sizing, od);
+  EXPECT_GT(sf.splits + sf.boundary_splits + sf.insertions, 0u);
+  for (unsigned threads : {2u, 0u}) {
+    VolumeMesh again = p.mesh;
+    od.threads = threads;
+    const ImproveStats sa = improve_mesh(again, p.surface, *p.query, p.sizing, od);
+    EXPECT_EQ(sa.rounds, sf.rounds) << threads << " threads";
+    EXPECT_EQ(sa.insertions, sf.insertions) << threads << " threads";
+    EXPECT_EQ(again.tets, first.tets) << threads << " threads";
+    EXPECT_EQ(again.nodes.points.xyz, first.nodes.points.xyz) << threads << " threads";
+  }
   o.rounds = 0;  // no rounds at all: the mesh is left as it is, whatever max_rounds says
   VolumeMesh none = p.mesh;
   EXPECT_EQ(improve_mesh(none, p.surface, *p.query, p.sizing, o).rounds, 0);
