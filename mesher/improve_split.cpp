@@ -10,19 +10,24 @@
 
 namespace kdmesh {
 
-bool split_sliver(ImproveTets& m, std::uint32_t t, int max_ring, std::uint32_t* node,
-                  std::vector<std::uint32_t>* created) {
-  if (!m.alive(t)) return false;
-  static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+std::array<std::pair<double, int>, 6> edges_longest_first(const ImproveTets& m, std::uint32_t t) {
   const std::uint32_t* v = m.v(t);
   std::array<std::pair<double, int>, 6> by_length;
   for (int e = 0; e < 6; ++e) {
-    const double *a = m.p(v[kEdge[e][0]]), *b = m.p(v[kEdge[e][1]]);
+    const double *a = m.p(v[kTetEdge[e][0]]), *b = m.p(v[kTetEdge[e][1]]);
     by_length[e] = {(a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]), e};
   }
   std::sort(by_length.begin(), by_length.end(), [](const auto& x, const auto& y) {
     return x.first != y.first ? x.first > y.first : x.second < y.second;
   });
+  return by_length;
+}
+
+bool split_sliver(ImproveTets& m, std::uint32_t t, int max_ring, std::uint32_t* node,
+                  std::vector<std::uint32_t>* created) {
+  if (!m.alive(t)) return false;
+  const std::uint32_t* v = m.v(t);
+  const std::array<std::pair<double, int>, 6> by_length = edges_longest_first(m, t);
   static thread_local std::vector<std::uint32_t> ring, tets, fresh;
   constexpr double kClearance = 0.15;  // of the split edge's length
   // The normal of the sliver's plane: across its two opposite edges (a flat tet's four
@@ -38,7 +43,7 @@ bool split_sliver(ImproveTets& m, std::uint32_t t, int max_ring, std::uint32_t* 
     for (double& c : nrm) c /= l;
   }
   for (const auto& [len2, e] : by_length) {
-    const std::uint32_t a = v[kEdge[e][0]], b = v[kEdge[e][1]];
+    const std::uint32_t a = v[kTetEdge[e][0]], b = v[kTetEdge[e][1]];
     if (!m.edge_ring(t, a, b, ring, tets) || int(ring.size()) > max_ring) continue;  // boundary edge
     const double *pa = m.p(a), *pb = m.p(b);
     const std::size_t n = ring.size();

@@ -3,12 +3,21 @@
 // plane (the smoothing then refines its position).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
+#include <array>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "mesher/improve_tets.h"
 
 namespace kdmesh {
+
+/// The vertex pairs (slots in the tet) of a tet's six edges.
+inline constexpr int kTetEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+
+/// Tet t's edges as (squared length, index into kTetEdge), longest first, ties by index: the
+/// order in which both splits try them.
+std::array<std::pair<double, int>, 6> edges_longest_first(const ImproveTets& m, std::uint32_t t);
 
 /// Splits tet t's longest edge that is not on the boundary (both ends may be surface nodes):
 /// every tet around the edge is cut in two through a new interior node, placed at the edge's

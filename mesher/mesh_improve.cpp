@@ -4,7 +4,6 @@
 #include "mesher/mesh_improve.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <queue>
@@ -111,7 +110,6 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
   std::size_t ops = 0;
   FlipCandidate cand, best;
   std::vector<std::uint32_t> created;
-  static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
   while (!heap.empty()) {
     const auto [q, t, ver] = heap.top();
     heap.pop();
@@ -123,7 +121,7 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
     // Validity (exact orientation, inside tests) is checked last, only for a candidate that
     // would become the best: the same choice as checking every candidate, for less work.
     const double* sines = cache.q().data();
-    for (const auto& e : kEdge)
+    for (const auto& e : kTetEdge)
       if (edge_removal(m, t, v[e[0]], v[e[1]], max_ring, cand, have ? best.q_new : -1, sines,
                        false) &&
           cand.improves() && (!have || cand.q_new > best.q_new) && flip_valid(m, cand)) {
@@ -138,7 +136,7 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
         best_is_edge = false;
       }
     if (boundary)
-      for (const auto& e : kEdge)
+      for (const auto& e : kTetEdge)
         if (boundary_edge_removal(m, t, v[e[0]], v[e[1]], max_ring, *boundary, cand,
                                   have ? best.q_new : -1, sines) &&
             cand.improves() && (!have || cand.q_new > best.q_new)) {
@@ -285,21 +283,21 @@ std::size_t cap_pass(ImproveTets& m, SineCache& cache, double threshold, const B
 
 struct SplitCounts {
   std::size_t interior = 0, boundary = 0, inserted = 0;
+  /// Adds them to the stats; returns their sum (the stage's operations).
+  std::size_t add_to(ImproveStats& st) const {
+    st.splits += interior;
+    st.boundary_splits += boundary;
+    st.insertions += inserted;
+    return interior + boundary + inserted;
+  }
 };
 
 /// Splits tet t's longest boundary edge that split_boundary_edge accepts (longest first, ties
 /// by position in t). Returns true if one was split.
 bool split_a_boundary_edge(ImproveTets& m, std::uint32_t t, int max_ring, const BoundaryContext& ctx,
                            std::vector<std::uint32_t>& created) {
-  static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-  std::array<std::pair<double, int>, 6> by_length;
-  for (int e = 0; e < 6; ++e) {
-    const double *a = m.p(m.v(t)[kEdge[e][0]]), *b = m.p(m.v(t)[kEdge[e][1]]);
-    by_length[e] = {-((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2])), e};
-  }
-  std::sort(by_length.begin(), by_length.end());
-  for (const auto& [neg_len2, e] : by_length) {
-    const std::uint32_t a = m.v(t)[kEdge[e][0]], b = m.v(t)[kEdge[e][1]];
+  for (const auto& [len2, e] : edges_longest_first(m, t)) {
+    const std::uint32_t a = m.v(t)[kTetEdge[e][0]], b = m.v(t)[kTetEdge[e][1]];
     if (split_boundary_edge(m, t, a, b, max_ring, ctx, &created)) return true;
   }
   return false;
@@ -430,11 +428,8 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
       if (removed) ops += removed + flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
     }
     if (options.split_angle > 0) {
-      const SplitCounts split = split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary, options.insert_nodes);
-      st.splits += split.interior;
-      st.boundary_splits += split.boundary;
-      st.insertions += split.inserted;
-      ops += split.interior + split.boundary + split.inserted;
+      ops += split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary,
+                        options.insert_nodes).add_to(st);
     }
     stage("flip " + n, ops);
     if (r < options.relax_rounds) {
@@ -461,11 +456,8 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
       ops += removed;
     }
     if (options.split_angle > 0) {
-      const SplitCounts split = split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary, options.insert_nodes, /*any_tet=*/true);
-      st.splits += split.interior;
-      st.boundary_splits += split.boundary;
-      st.insertions += split.inserted;
-      ops += split.interior + split.boundary + split.inserted;
+      ops += split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary,
+                        options.insert_nodes, /*any_tet=*/true).add_to(st);
     }
     if (ops) ops += flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
     stage("final", ops);
