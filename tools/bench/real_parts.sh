@@ -15,6 +15,9 @@
 #   PARTS     part file names in models/real/ (default: every part fetch.sh marks "bench")
 #   SIZES     divisors of the bbox diagonal (default: "20 40 80")
 #   KDMESH    kdmesh executable (default: build/kdmesh)
+#   KDMESH_VERSION  the version column of kdmesh's rows (default: the last commit that
+#             changed the mesher's sources in the executable's own work tree; for a copy
+#             outside one, the repository's HEAD, which need not be what it was built from)
 #   MESH3     CGAL Mesh_3 executable (default: built on demand in $WORK/build-mesh3 with
 #             -DKDMESH_BENCH_MESH3=ON, -j$JOBS; the compile takes minutes)
 #   TIMEOUT   seconds per mesher run (default 300; a timeout is a failure, reported as such)
@@ -132,6 +135,7 @@ if [[ " $TOOLS " == *" kdmesh "* ]]; then
     dirty="$(cd "$(dirname "$KDMESH")/.." && git status --porcelain -- core io mesher sizing tools/kdmesh tools/lib 2>/dev/null | head -1)"
     VERSION[kdmesh]="kdmesh sources at $kd_src${dirty:+ + uncommitted changes} ($KDMESH)"
   fi
+  if [ -n "${KDMESH_VERSION:-}" ]; then VERSION[kdmesh]="$KDMESH_VERSION"; fi
 fi
 
 run_case() {  # tool part div
