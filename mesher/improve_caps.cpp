@@ -12,8 +12,6 @@ namespace kdmesh {
 
 namespace {
 
-constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-
 /// True if (a, b) is an edge of a boundary face.
 bool boundary_edge(const ImproveTets& m, std::uint32_t a, std::uint32_t b) {
   static thread_local std::vector<std::uint32_t> star;
@@ -58,7 +56,7 @@ bool remove_cap(ImproveTets& m, std::uint32_t t, const BoundaryContext& ctx) {
     m.star(apex, star);
     if (star.size() != 1) return false;
     const int f = inner[0];
-    if (!face_on_surface(m.p(v[kFace[f][0]]), m.p(v[kFace[f][2]]), m.p(v[kFace[f][1]]), ctx)) return false;
+    if (!face_on_surface(m.p(v[kTetFace[f][0]]), m.p(v[kTetFace[f][2]]), m.p(v[kTetFace[f][1]]), ctx)) return false;
     return m.remove(t, apex);
   }
   if (nb != 2) return false;
@@ -73,7 +71,7 @@ bool remove_cap(ImproveTets& m, std::uint32_t t, const BoundaryContext& ctx) {
   // i.e. reversed from its orientation outward of t.
   for (int j = 0; j < 2; ++j) {
     const int f = inner[j];
-    if (!face_on_surface(m.p(v[kFace[f][0]]), m.p(v[kFace[f][2]]), m.p(v[kFace[f][1]]), ctx)) return false;
+    if (!face_on_surface(m.p(v[kTetFace[f][0]]), m.p(v[kTetFace[f][2]]), m.p(v[kTetFace[f][1]]), ctx)) return false;
   }
   return m.remove(t);
 }

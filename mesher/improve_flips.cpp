@@ -150,12 +150,11 @@ bool face_removal(const ImproveTets& m, std::uint32_t t, int i, FlipCandidate& o
   out.q_new = -1;
   const std::uint32_t r = m.adj(t, i);
   if (r == kImproveNone) return false;
-  static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   const std::uint32_t* v = m.v(t);
   const std::uint32_t u = r >> 2;
   const std::uint32_t p = v[i], q = m.v(u)[r & 3];
-  // kFace is outward from t (p on its negative side); reversed, p is on the positive side.
-  const std::uint32_t x = v[kFace[i][0]], y = v[kFace[i][2]], z = v[kFace[i][1]];
+  // kTetFace is outward from t (p on its negative side); reversed, p is on the positive side.
+  const std::uint32_t x = v[kTetFace[i][0]], y = v[kTetFace[i][2]], z = v[kTetFace[i][1]];
   out.old = {t, u};
   out.q_old = sines ? std::min(sines[t], sines[u]) : std::min(sine_of(m, t), sine_of(m, u));
   out.fresh = {x, y, q, p, y, z, q, p, z, x, q, p};

@@ -12,7 +12,6 @@ namespace kdmesh {
 
 namespace {
 
-constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};  // outward
 constexpr std::size_t kMaxCavity = 64;  // tets
 
 /// The worst tet_sine of the fan of x over `faces` (3 ids per face, outward of the cavity),
@@ -48,7 +47,7 @@ bool insert_into(ImproveTets& m, const std::vector<std::uint32_t>& cavity,
     for (int f = 0; f < 4; ++f) {
       const std::uint32_t r = m.adj(c, f);
       if (r != kImproveNone && std::find(cavity.begin(), cavity.end(), r >> 2) != cavity.end()) continue;
-      faces.insert(faces.end(), {v[kFace[f][0]], v[kFace[f][1]], v[kFace[f][2]]});
+      faces.insert(faces.end(), {v[kTetFace[f][0]], v[kTetFace[f][1]], v[kTetFace[f][2]]});
     }
   }
   std::sort(verts.begin(), verts.end());
@@ -147,13 +146,15 @@ bool insert_in_cavity(ImproveTets& m, std::uint32_t t, std::vector<std::uint32_t
   seeds.assign(c, c + 3);
   for (int f = 0; f < 4; ++f) {
     if (m.adj(t, f) != kImproveNone) continue;
-    const double *a = p[kFace[f][0]], *b = p[kFace[f][1]], *d = p[kFace[f][2]];
+    const double *a = p[kTetFace[f][0]], *b = p[kTetFace[f][1]], *d = p[kTetFace[f][2]];
     double n[3];
     tri_normal(a, b, d, n);  // outward
     const double nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     if (!(nl > 0)) continue;
     auto dist = [](const double* u, const double* w) {
-      return std::sqrt((u[0] - w[0]) * (u[0] - w[0]) + (u[1] - w[1]) * (u[1] - w[1]) + (u[2] - w[2]) * (u[2] - w[2]));
+      double d[3];
+      improve_detail::sub(u, w, d);
+      return improve_detail::len(d);
     };
     const double edge = (dist(a, b) + dist(b, d) + dist(d, a)) / 3;
     for (double depth : {0.4, 0.7})

@@ -14,10 +14,7 @@ namespace kdmesh {
 
 namespace {
 
-constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-
 double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-
 
 struct StarTet {
   const double* p[4];
@@ -76,7 +73,7 @@ class VertexStar {
         if (k == s.iv) continue;
         link_.push_back(tv[k]);
         if (m.adj(t, k) == kImproveNone) {  // a boundary face holding v
-          bfaces_.push_back({tv[kFace[k][0]], tv[kFace[k][1]], tv[kFace[k][2]]});
+          bfaces_.push_back({tv[kTetFace[k][0]], tv[kTetFace[k][1]], tv[kTetFace[k][2]]});
           std::array<double, 3> n;
           tri_normal(m.p(bfaces_.back()[0]), m.p(bfaces_.back()[1]), m.p(bfaces_.back()[2]), n.data());
           bnormal_.push_back(n);

@@ -12,9 +12,6 @@
 
 namespace kdmesh {
 
-/// The vertex pairs (slots in the tet) of a tet's six edges.
-inline constexpr int kTetEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-
 /// Tet t's edges as (squared length, index into kTetEdge), longest first, ties by index: the
 /// order in which both splits try them.
 std::array<std::pair<double, int>, 6> edges_longest_first(const ImproveTets& m, std::uint32_t t);

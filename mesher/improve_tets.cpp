@@ -23,11 +23,8 @@ Key sorted_key(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
   return {a, b, c};
 }
 
-/// Vertices of face i of a tet, outward for a positively oriented tet (mesh_check's order).
-constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-
 Key face_key(const std::uint32_t* v, int i) {
-  return sorted_key(v[kFace[i][0]], v[kFace[i][1]], v[kFace[i][2]]);
+  return sorted_key(v[kTetFace[i][0]], v[kTetFace[i][1]], v[kTetFace[i][2]]);
 }
 
 }  // namespace
@@ -386,7 +383,7 @@ std::size_t ImproveTets::write_back(VolumeMesh& mesh) const {
     for (int i = 0; i < 4; ++i)
       if (ta_[4 * t + i] == kImproveNone) {
         const std::uint32_t* v = &tv_[4 * t];
-        now.push_back({face_key(v, i), tet_id[t], {v[kFace[i][0]], v[kFace[i][1]], v[kFace[i][2]]}});
+        now.push_back({face_key(v, i), tet_id[t], {v[kTetFace[i][0]], v[kTetFace[i][1]], v[kTetFace[i][2]]}});
       }
   }
   std::sort(now.begin(), now.end(), [](const BFace& a, const BFace& b) { return a.key < b.key; });

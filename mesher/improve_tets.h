@@ -18,6 +18,12 @@ struct VolumeMesh;
 /// and its slot is on the free list. Every live tet is positively oriented.
 inline constexpr std::uint32_t kImproveNone = 0xFFFFFFFFu;
 
+/// Vertex slots of face i of a tet (the face opposite slot i), outward for a positively
+/// oriented tet (mesh_check's order).
+inline constexpr int kTetFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+/// Vertex slots of a tet's six edges.
+inline constexpr int kTetEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+
 class ImproveTets {
  public:
   /// Builds the face adjacency of `tets` (4 ids into `nodes` per tet, positively oriented;
