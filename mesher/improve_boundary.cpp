@@ -66,19 +66,12 @@ bool point_on_feature(const double* a, const double* b, const BoundaryContext& c
   *facet_out = facet;
   if (facet == kNoFacet) return false;
   const SurfaceMesh& sm = ctx.surface->mesh;
-  const std::vector<std::uint32_t>& fe = ctx.features->edges;  // (lo, hi) pairs, sorted
   const double len2 = (b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) + (b[2] - a[2]) * (b[2] - a[2]);
   for (int j = 0; j < 3; ++j) {
     std::uint32_t p = sm.tri(facet)[j], q = sm.tri(facet)[(j + 1) % 3];
     if (p > q) std::swap(p, q);
-    std::size_t lo = 0, hi = fe.size() / 2;  // binary search over the pairs
-    while (lo < hi) {
-      const std::size_t mid = (lo + hi) / 2;
-      if (fe[2 * mid] < p || (fe[2 * mid] == p && fe[2 * mid + 1] < q)) lo = mid + 1;
-      else hi = mid;
-    }
     const double *pp = sm.points.p(p), *pq = sm.points.p(q);
-    if (lo < fe.size() / 2 && fe[2 * lo] == p && fe[2 * lo + 1] == q && within_tube(m, pp, pq, len2)) {
+    if (ctx.features->has_edge(p, q) && within_tube(m, pp, pq, len2)) {
       // m's closest point on the segment pq.
       double d[3], t = 0, dd = 0;
       for (int k = 0; k < 3; ++k) d[k] = pq[k] - pp[k], t += (m[k] - pp[k]) * d[k], dd += d[k] * d[k];

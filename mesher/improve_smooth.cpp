@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "mesher/improve_quality.h"
@@ -56,7 +57,10 @@ class VertexStar {
     curved_ = false;
     const NodeKind kind = m.nodes().kind[v];
     on_surface_ = kind != NodeKind::interior;
-    if (on_surface_ && (kind != NodeKind::surface || !ctx.surface || !ctx.query)) return false;
+    feature_ = kind == NodeKind::edge;
+    if (feature_ && !(curved && ctx.slide_features && ctx.boundary && ctx.boundary->features))
+      return false;
+    if (on_surface_ && (kind == NodeKind::corner || !ctx.surface || !ctx.query)) return false;
     m.star(v, star_);
     if (star_.empty()) return false;
     st_.clear();
@@ -93,6 +97,7 @@ class VertexStar {
     if (!(nl > 0)) return false;
     for (double& c : n_) c /= nl;
     std::copy_n(n_, 3, tn_);
+    if (feature_) return load_curve(m);
     // Planar: every boundary face at v lies in the facet's plane.
     for (const auto& bf : bfaces_)
       for (std::uint32_t w : bf)
@@ -109,6 +114,24 @@ class VertexStar {
     for (double& c : tn_) c /= tl;
     return true;
   }
+
+  /// A feature node: its two neighbours along the curve (mesh edges that run along a feature
+  /// edge). False unless there are exactly two: the node then ends no curve and joins none.
+  bool load_curve(const ImproveTets& m) {
+    curved_ = true;  // its faces are checked against the surface like a curved fan's
+    int found = 0;
+    for (std::uint32_t w : link_) {
+      const NodeKind k = m.nodes().kind[w];
+      if (k != NodeKind::edge && k != NodeKind::corner) continue;
+      if (!along_feature(m.p(v_), m.p(w), *ctx_->boundary)) continue;
+      if (found == 2) return false;
+      ends_[found++] = w;
+    }
+    return found == 2;
+  }
+  bool feature() const { return feature_; }
+  /// The neighbour along the curve on side i (0, 1) of a feature node.
+  std::uint32_t curve_end(int i) const { return ends_[i]; }
 
   /// Mean length of the edges at v.
   double mean_edge(const ImproveTets& m) const {
@@ -154,16 +177,20 @@ class VertexStar {
   }
   /// Projects x onto the facet plane (surface nodes of a planar fan) or onto the closest
   /// point of the surface (curved fan).
-  void project(double* x) const {
-    if (!on_surface_) return;
+  /// Returns false where a feature node's point has no feature edge to go to (the move is
+  /// refused).
+  bool project(double* x) const {
+    if (!on_surface_) return true;
+    if (feature_) return project_on_curve(x);
     if (curved_) {
       double cp[3];
       ctx_->query->closest(x, cp);
       std::copy_n(cp, 3, x);
-      return;
+      return true;
     }
     const double s = plane_offset(x);
     for (int k = 0; k < 3; ++k) x[k] -= s * n_[k];
+    return true;
   }
   void project_dir(double* g) const {
     if (!on_surface_) return;
@@ -189,6 +216,15 @@ class VertexStar {
       double n[3];
       tri_normal(p[0], p[1], p[2], n);
       if (!(dot3(n, bnormal_[k].data()) > 0)) return false;
+    }
+    if (feature_) {
+      // Between its two curve neighbours, and both edges to them still along the feature.
+      for (int i = 0; i < 2; ++i) {
+        const double *e = m_->p(ends_[i]), *o = m_->p(ends_[1 - i]), *x0 = m_->p(v_);
+        double s0 = 0, s1 = 0;
+        for (int k = 0; k < 3; ++k) s0 += (x[k] - e[k]) * (x0[k] - e[k]), s1 += (x[k] - e[k]) * (o[k] - e[k]);
+        if (!(s0 > 0 && s1 > 0) || !along_feature(e, x, *ctx_->boundary)) return false;
+      }
     }
     if (curved_) {
       // Each face at v stays on the surface (the mesh check's sampling and tolerance); x is
@@ -216,6 +252,29 @@ class VertexStar {
   }
 
  private:
+  /// x to the closest point of a feature edge of the facet closest to x.
+  bool project_on_curve(double* x) const {
+    double cp[3];
+    std::uint32_t facet = kNoFacet;
+    ctx_->query->closest(x, cp, &facet);
+    if (facet == kNoFacet) return false;
+    const SurfaceMesh& sm = ctx_->surface->mesh;
+    double best = std::numeric_limits<double>::infinity(), y[3] = {0, 0, 0};
+    for (int j = 0; j < 3; ++j) {
+      const std::uint32_t p = sm.tri(facet)[j], q = sm.tri(facet)[(j + 1) % 3];
+      if (!ctx_->boundary->features->has_edge(p, q)) continue;
+      const double *pp = sm.points.p(p), *pq = sm.points.p(q);
+      double d[3], t = 0, dd = 0;
+      for (int k = 0; k < 3; ++k) d[k] = pq[k] - pp[k], t += (x[k] - pp[k]) * d[k], dd += d[k] * d[k];
+      t = dd > 0 ? std::clamp(t / dd, 0.0, 1.0) : 0.0;
+      double z[3], dist = 0;
+      for (int k = 0; k < 3; ++k) z[k] = pp[k] + t * d[k], dist += (z[k] - x[k]) * (z[k] - x[k]);
+      if (dist < best) best = dist, std::copy_n(z, 3, y);
+    }
+    if (!(best < std::numeric_limits<double>::infinity())) return false;
+    std::copy_n(y, 3, x);
+    return true;
+  }
   double plane_offset(const double* x) const {
     const double d[3] = {x[0] - fp_[0][0], x[1] - fp_[0][1], x[2] - fp_[0][2]};
     return dot3(d, n_);
@@ -233,7 +292,8 @@ class VertexStar {
   const ImproveTets* m_ = nullptr;
   const SmoothContext* ctx_ = nullptr;
   std::uint32_t v_ = 0, facet_ = kNoFacet;
-  bool on_surface_ = false, curved_ = false;
+  bool on_surface_ = false, curved_ = false, feature_ = false;
+  std::uint32_t ends_[2] = {0, 0};  // a feature node's neighbours along its curve
   double n_[3] = {0, 0, 0};   // the facet's unit normal
   double tn_[3] = {0, 0, 0};  // the tangent plane's unit normal (n_ on a planar fan)
   const double* fp_[3] = {nullptr, nullptr, nullptr};
@@ -242,6 +302,42 @@ class VertexStar {
   std::vector<std::array<std::uint32_t, 3>> bfaces_;
   std::vector<std::array<double, 3>> bnormal_;
 };
+
+/// A feature node's moves along its curve: towards either curve neighbour by 40, 20, 10 and 5%
+/// of the way, projected onto the feature, best first; the first acceptable one that raises
+/// the star's smallest quality is taken, up to `iterations` times. x and q0 are updated.
+bool slide_on_curve(const ImproveTets& m, const VertexStar& vs, int iterations, double* x, double& q0) {
+  static constexpr double kSteps[4] = {0.4, 0.2, 0.1, 0.05};
+  bool moved = false;
+  for (int iter = 0; iter < iterations; ++iter) {
+    std::array<std::pair<double, std::array<double, 3>>, 8> cand;
+    int n = 0;
+    for (int side = 0; side < 2; ++side) {
+      const double* e = m.p(vs.curve_end(side));
+      for (double f : kSteps) {
+        std::array<double, 3> y;
+        for (int k = 0; k < 3; ++k) y[k] = x[k] + f * (e[k] - x[k]);
+        // The chord's point first: the projection (a closest-point query) only for a move
+        // that helps before it (on a straight curve the projection does not move it).
+        if (!(vs.eval(y.data()) > q0) || !vs.project(y.data())) continue;
+        const double q = vs.eval(y.data());
+        if (q > q0) cand[n++] = {q, y};
+      }
+    }
+    // Best first; ties in the order generated (side 0 first, longer steps first).
+    std::stable_sort(cand.begin(), cand.begin() + n,
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
+    bool stepped = false;
+    for (int i = 0; i < n && !stepped; ++i) {
+      if (!vs.acceptable(cand[i].second.data())) continue;
+      std::copy_n(cand[i].second.data(), 3, x);
+      q0 = cand[i].first;
+      stepped = moved = true;
+    }
+    if (!stepped) break;
+  }
+  return moved;
+}
 
 }  // namespace
 
@@ -255,6 +351,13 @@ bool smooth_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, do
   double x[3] = {x0[0], x0[1], x0[2]};
   const double q_start = vs.eval(x);
   double q0 = q_start;
+  if (vs.feature()) {
+    const bool slid = slide_on_curve(m, vs, ctx.iterations, x, q0);
+    if (before) *before = q_start;
+    if (after) *after = q0;
+    if (slid) vs.commit(m, x);
+    return slid;
+  }
   bool moved = false;
   const double L = vs.mean_edge(m), h = 1e-7 * L;
   const std::size_t n = vs.size();
@@ -286,7 +389,7 @@ bool smooth_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, do
     bool stepped = false;
     for (int ls = 0; ls < 12; ++ls, alpha /= 2) {
       double y[3] = {x[0] + alpha * d[0], x[1] + alpha * d[1], x[2] + alpha * d[2]};
-      vs.project(y);
+      if (!vs.project(y)) continue;
       const double q = vs.eval(y);
       if (!(q > q0) || !vs.acceptable(y)) continue;
       std::copy_n(y, 3, x);
@@ -315,7 +418,7 @@ bool relax_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, dou
   for (double f : {1.0, 0.5, 0.25}) {
     double y[3];
     for (int k = 0; k < 3; ++k) y[k] = x0[k] + f * (c[k] - x0[k]);
-    vs.project(y);
+    if (!vs.project(y)) continue;
     const SineRatio now = vs.eval_both(y);
     if (!(now.ratio > old.ratio)) continue;
     if (now.sine < q_floor) continue;

@@ -2,7 +2,8 @@
 // along the steepest ascent direction of the smallest tet_sine of its star (the min-norm point
 // of the active tets' gradients, Freitag & Ollivier-Gooch), with a halving line search; a move
 // is kept only if the star's smallest quality rises and every tet stays valid. Interior nodes
-// move freely. Surface nodes (not feature nodes) slide on the surface: within the plane of
+// move freely. Feature nodes slide along their feature curve (SmoothContext::slide_features).
+// Surface nodes slide on the surface: within the plane of
 // their facet when every boundary face at them lies in that plane (the fan of boundary faces
 // keeps its outer polygon and every face its orientation, so it covers the same part of the
 // surface as before); else, given a BoundaryContext, along the fan's tangent plane and back
@@ -26,6 +27,10 @@ struct SmoothContext {
   /// Set: surface nodes on curved fans slide on the surface too (smooth_vertex only; the
   /// relaxation keeps them). Null: only within planar fans.
   const BoundaryContext* boundary = nullptr;
+  /// With boundary and its features set: feature nodes (not corners) slide along their curve,
+  /// between their two neighbours on it, projected onto the input's feature edges; the edges
+  /// to those neighbours keep running along the feature (smooth_vertex only).
+  bool slide_features = true;
   int iterations = 4;          ///< ascent steps per call
 };
 

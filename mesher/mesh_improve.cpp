@@ -395,6 +395,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
     ctx.surface = &surface;
     ctx.query = &query;
     if (options.slide_curved) ctx.boundary = &boundary;
+    ctx.slide_features = options.slide_features;
   }
   ctx.on_surface = 1e-11 * diag;
   const BoundaryContext* flip_boundary = options.flip_boundary ? &boundary : nullptr;
@@ -443,6 +444,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
         smooth_pass(m, cache, smooth_threshold, ctx, options.threads);
     cache.refresh_stars(moved);
     st.smoothed += moved.size();
+    for (std::uint32_t v : moved) st.feature_slides += m.nodes().kind[v] == NodeKind::edge;
     stage("smooth " + n, moved.size());
   }
   // The last smoothing can leave a cap or a sliver that an earlier pass would have taken

@@ -34,6 +34,9 @@ struct ImproveOptions {
   /// ... and on curved parts of the surface too: the smoothing slides them on the input
   /// surface, each boundary face at them staying within hausdorff_tolerance (as for caps).
   bool slide_curved = true;
+  /// ... and feature nodes (not corners) along their feature curve, between their two
+  /// neighbours on it (needs feature_angle > 0; mesher/improve_smooth.h).
+  bool slide_features = true;
   /// Flip boundary edges within the surface where that improves the worst tet
   /// (boundary_edge_removal, mesher/improve_flips.h; new faces within hausdorff_tolerance).
   bool flip_boundary = true;
@@ -85,6 +88,7 @@ struct ImproveStats {
   /// the quality figures only with measure_stages.
   std::vector<ImproveStage> stages;
   std::size_t edge_removals = 0, face_removals = 0, smoothed = 0, relaxed = 0;
+  std::size_t feature_slides = 0;    ///< moves of feature nodes along their curve (in smoothed)
   std::size_t boundary_flips = 0;    ///< boundary edges flipped within the surface
   std::size_t caps_removed = 0;      ///< boundary caps taken out of the domain
   std::size_t splits = 0;            ///< sliver edges split (interior nodes added)
@@ -97,7 +101,8 @@ struct ImproveStats {
 
 /// Improves `mesh` in place. Every tet stays exactly positively oriented and not flat; the
 /// boundary faces stay on the surface (surface nodes slide on the input surface, within planar
-/// patches or within the tolerance on curved ones, feature nodes never move; the boundary face
+/// patches or within the tolerance on curved ones, feature nodes along their feature curve,
+/// corners never move; the boundary face
 /// list changes only where a cap is taken out or a boundary edge flipped, and then within the
 /// tolerance of the local size `sizing` gives; boundary_tet is recomputed); regions are kept;
 /// nodes are added only by sliver and boundary-edge splits; the result depends only on the input and the

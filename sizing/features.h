@@ -2,6 +2,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "core/surface_mesh.h"
@@ -13,6 +14,17 @@ struct FeatureEdges {
   std::vector<std::uint32_t> edges;    ///< 2 per edge (a < b), sorted, unique
   std::vector<std::uint32_t> corners;  ///< points where != 2 feature edges meet (ends, junctions), sorted
   std::size_t num_edges() const { return edges.size() / 2; }
+  /// True if (a, b), in either order, is a feature edge (binary search).
+  bool has_edge(std::uint32_t a, std::uint32_t b) const {
+    if (a > b) std::swap(a, b);
+    std::size_t lo = 0, hi = edges.size() / 2;
+    while (lo < hi) {
+      const std::size_t mid = (lo + hi) / 2;
+      if (edges[2 * mid] < a || (edges[2 * mid] == a && edges[2 * mid + 1] < b)) lo = mid + 1;
+      else hi = mid;
+    }
+    return lo < edges.size() / 2 && edges[2 * lo] == a && edges[2 * lo + 1] == b;
+  }
 };
 
 /// Edges whose two facets' normals differ by >= angle_deg (dihedral deviation from flat), on

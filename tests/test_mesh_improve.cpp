@@ -622,6 +622,61 @@ TEST(ImproveSmooth, InteriorVertexMovesToRaiseTheWorstTet) {
   expect_consistent(m);
 }
 
+// Feature nodes slide along their curve (issue 18: caps folded along feature edges kept 3-4
+// feature nodes that could not move). On the cube's edge y = z = 0 between the corners a and
+// b, the edge node c sits at x = 0.1, close to a: the two tets (a c d e) and (c b d e), over
+// the top face (d) and the front face (e), are poor. c moves along the edge towards the middle,
+// stays exactly on it, both its edges still run along the feature, and the worst tet is
+// better. With slide_features off, or for a corner, nothing moves.
+TEST(ImproveSmooth, FeatureNodeSlidesAlongItsCurve) {
+  const CubeContext cc(0.5);
+  NodeSet n;
+  auto add = [&](double x, double y, double z, NodeKind k) { return add_node(n, x, y, z, k); };
+  const std::uint32_t a = add(0, 0, 0, NodeKind::corner), b = add(1, 0, 0, NodeKind::corner),
+                      c = add(0.1, 0, 0, NodeKind::edge), d = add(0.5, 0.5, 0, NodeKind::surface),
+                      e = add(0.5, 0, -0.5, NodeKind::surface);
+  for (std::uint32_t v : {a, b, c, d, e}) {
+    double cp[3];
+    cc.query->closest(n.points.p(v), cp, &n.facet[v]);
+    ASSERT_NE(n.facet[v], kNoFacet);
+  }
+  std::vector<std::uint32_t> tets = positive(n, a, c, d, e);
+  const auto t2 = positive(n, c, b, d, e);
+  tets.insert(tets.end(), t2.begin(), t2.end());
+  SmoothContext ctx;
+  ctx.surface = &cc.surface;
+  ctx.query = cc.query.get();
+  ctx.boundary = &cc.ctx;
+  ctx.on_surface = 1e-11;
+  {
+    NodeSet copy = n;
+    ImproveTets m(copy, tets, {0, 0});
+    SmoothContext off = ctx;
+    off.slide_features = false;
+    EXPECT_FALSE(smooth_vertex(m, c, off));
+    EXPECT_FALSE(smooth_vertex(m, a, ctx));  // a corner
+    EXPECT_EQ(copy.points.p(c)[0], 0.1);
+  }
+  ImproveTets m(n, tets, {0, 0});
+  double before = 0, after = 0;
+  ASSERT_TRUE(smooth_vertex(m, c, ctx, &before, &after));
+  EXPECT_GT(after, before);
+  const double* x = m.p(c);
+  EXPECT_EQ(x[1], 0.0);
+  EXPECT_EQ(x[2], 0.0);
+  EXPECT_GT(x[0], 0.3);  // the optimum is x = 0.5, by symmetry
+  EXPECT_LT(x[0], 0.7);
+  EXPECT_TRUE(keeps_feature(m, a, c, cc.ctx));
+  EXPECT_TRUE(keeps_feature(m, c, b, cc.ctx));
+  double worst = 1;
+  for (std::uint32_t t = 0; t < 2; ++t) {
+    const std::uint32_t* v = m.v(t);
+    worst = std::min(worst, tet_sine(m.p(v[0]), m.p(v[1]), m.p(v[2]), m.p(v[3])));
+  }
+  EXPECT_DOUBLE_EQ(worst, after);
+  expect_consistent(m);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Meshes from the pipeline.
 
