@@ -19,6 +19,7 @@ enum class ExitCode : int {
   check = 5,        ///< a --check verification found a mismatch
   output = 6,       ///< an output file could not be written
   resource = 7,     ///< the job would exceed a resource limit (e.g. --max-memory)
+  cancelled = 130,  ///< the caller cancelled the job (128 + SIGINT, as a shell reports Ctrl-C)
 };
 
 class Error : public std::runtime_error {

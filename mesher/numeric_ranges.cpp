@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "tools/lib/numeric_ranges.h"
+#include "mesher/numeric_ranges.h"
 
 #include <algorithm>
 #include <cmath>
@@ -21,7 +21,7 @@ std::string num(double x) {
 
 }  // namespace
 
-void check_option_ranges(const MeshJob& job) {
+void check_option_ranges(const MeshParams& job) {
   const std::string who = "job '" + job.name + "': ";
   auto positive_finite = [&](double v, const char* what) {
     if (!(std::isfinite(v) && v > 0)) throw UsageError(who + what + " " + num(v) + " must be finite and > 0");
@@ -47,7 +47,7 @@ void check_option_ranges(const MeshJob& job) {
   }
 }
 
-ModelRanges check_model_ranges(const MeshJob& job, const SurfaceMesh& raw) {
+ModelRanges check_model_ranges(const MeshParams& job, const SurfaceMesh& raw) {
   const double size = job.sizing.max_size;
   const bool given = job.sizing.min_size > 0 && job.sizing.min_size != size / 1000;  // not the default
   ModelRanges out{size, given ? job.sizing.min_size : size / 1000, {}};

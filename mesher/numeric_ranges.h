@@ -5,7 +5,7 @@
 #pragma once
 #include "core/surface_mesh.h"
 #include "mesher/quality.h"
-#include "tools/lib/mesh_job.h"
+#include "mesher/mesh_solid.h"
 
 namespace kdmesh {
 
@@ -78,7 +78,7 @@ constexpr double kMaxGradation = 2;
 /// Checks the job's option values alone (before reading anything): size, min_size, gradation,
 /// scale and sharp_angle finite and in range; zone sizes, coordinates and radii finite, the
 /// coordinates within kMaxLength. UsageError (exit 2) naming the option.
-void check_option_ranges(const MeshJob& job);
+void check_option_ranges(const MeshParams& job);
 
 /// Checks the model once read, after scaling (before it is prepared): every coordinate times
 /// job.scale within kMaxLength, the extent at least kMinLength, the coordinates within
@@ -95,6 +95,6 @@ struct ModelRanges {
   double min_size = 0;  ///< the min_size to mesh with
   std::string note;     ///< a notice when the size was lowered or the default min_size raised, else empty
 };
-ModelRanges check_model_ranges(const MeshJob& job, const SurfaceMesh& raw);
+ModelRanges check_model_ranges(const MeshParams& job, const SurfaceMesh& raw);
 
 }  // namespace kdmesh

@@ -30,7 +30,7 @@ inline constexpr double kZeroVolumeLength = 1e-9;
 /// as on it: boundary vertices in the mesh check, tet centroids in the inside/outside
 /// classification. Relative to the extent, so independent of scale; the coordinates' rounding
 /// (relative to their magnitude) must stay below it, which bounds how far from the origin a
-/// model may lie (tools/lib/numeric_ranges.h, kMaxMagnitudePerExtent), and legitimate tets must
+/// model may lie (mesher/numeric_ranges.h, kMaxMagnitudePerExtent), and legitimate tets must
 /// be thicker, which bounds the smallest size (kMinSizePerExtent).
 inline constexpr double kOnSurfaceDistance = 1e-9;
 

@@ -1,5 +1,5 @@
 // Issue 19, class 2 — no crash and no hang on extreme numbers: every numeric input is checked
-// against the range where the pipeline is exact and finite (tools/lib/numeric_ranges.h);
+// against the range where the pipeline is exact and finite (mesher/numeric_ranges.h);
 // outside it a clear error names the option, inside it the mesh is correct. Batch jobs have a
 // time limit.
 // SPDX-License-Identifier: AGPL-3.0-or-later
@@ -20,7 +20,7 @@
 #include "io/surface_io.h"
 #include "tests/support/run_cli.h"
 #include "tools/lib/mesh_job.h"
-#include "tools/lib/numeric_ranges.h"
+#include "mesher/numeric_ranges.h"
 
 namespace {
 
@@ -53,7 +53,7 @@ fs::path cube(double offset = 0) {
 }
 fs::path unit_cube() { return cube(0); }
 
-/// A number as the range checks print it (tools/lib/numeric_ranges.cpp).
+/// A number as the range checks print it (mesher/numeric_ranges.cpp).
 std::string num(double x) {
   std::ostringstream s;
   s.precision(6);

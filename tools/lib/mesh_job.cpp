@@ -3,7 +3,6 @@
 #include "tools/lib/mesh_job.h"
 
 #include <algorithm>
-#include <cmath>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -11,7 +10,6 @@
 #include <sstream>
 #include <memory>
 #include <new>
-#include <numbers>
 #include <vector>
 
 #include "core/atomic_file.h"
@@ -26,23 +24,13 @@
 #include "io/vtu_writer.h"
 #include "mesher/boundary_groups.h"
 #include "mesher/delaunay.h"
-#include "mesher/fe_assembly.h"
 #include "mesher/mesh_check.h"
-#include "mesher/mesh_improve.h"
-#include "mesher/node_placement.h"
+#include "mesher/mesh_solid.h"
 #include "mesher/quality.h"
-#include "mesher/resource_estimate.h"
-#include "mesher/size_fidelity.h"
-#include "mesher/surface_prepare.h"
-#include "mesher/surface_query.h"
-#include "mesher/surface_repair.h"
-#include "mesher/thickness_sizes.h"
 #include "mesher/tet_compare.h"
-#include "mesher/volume_mesh.h"
-#include "sizing/features.h"
 #include "tools/lib/delaunay_verify.h"
 #include "tools/lib/job_paths.h"
-#include "tools/lib/numeric_ranges.h"
+#include "mesher/numeric_ranges.h"
 
 namespace kdmesh {
 
@@ -124,6 +112,7 @@ std::string error_type_name(ExitCode code) {
     case ExitCode::check: return "check";
     case ExitCode::output: return "output";
     case ExitCode::resource: return "resource";
+    case ExitCode::cancelled: return "cancelled";
     case ExitCode::failure: break;
   }
   return "internal";
@@ -231,432 +220,99 @@ void make_parent_dirs(const std::string& path) {
   if (ec) throw OutputError(path, "cannot create directory '" + parent.string() + "': " + ec.message());
 }
 
-/// prepare_surface, with a hint in the error when an opt-in repair would fix the defect.
-PreparedSurface prepare_with_hint(SurfaceMesh raw, const MeshJob& job, const SurfaceOptions& so) {
-  try {
-    return prepare_surface(std::move(raw), job.input, so);
-  } catch (const SurfaceError& e) {
-    const char* repair = nullptr;
-    switch (e.defect()) {
-      case SurfaceError::Defect::degenerate: repair = job.repair.degenerate ? nullptr : "degenerate"; break;
-      case SurfaceError::Defect::duplicates: repair = job.repair.duplicates ? nullptr : "duplicates"; break;
-      case SurfaceError::Defect::orientation: repair = job.repair.orientation ? nullptr : "orientation"; break;
-      case SurfaceError::Defect::other: break;
-    }
-    if (!repair) throw;
-    throw SurfaceError(std::string(e.what()) + " (the opt-in repair '--repair " + repair + "', or 'repair: [" +
-                           repair + "]' in a batch file, fixes this)",
-                       e.facets(), e.defect());
+/// The summary's "improve" block.
+nlohmann::json improve_json(const ImproveStats& imp) {
+  return {{"edge_removals", imp.edge_removals}, {"face_removals", imp.face_removals},
+          {"relaxed", imp.relaxed}, {"smoothed", imp.smoothed},
+          {"boundary_changes", imp.boundary_changes}, {"caps_removed", imp.caps_removed}, {"splits", imp.splits},
+          {"boundary_splits", imp.boundary_splits}, {"insertions", imp.insertions},
+          {"rounds", imp.rounds}, {"feature_slides", imp.feature_slides},
+          {"boundary_flips", imp.boundary_flips}};
+}
+
+/// The summary's "counts" block: the figures of the stages reached.
+nlohmann::json counts_json(const MeshReport& r) {
+  const MeshReport::Counts& c = r.counts;
+  nlohmann::json j = nlohmann::json::object();
+  if (r.has_surface) {
+    j["surface_points"] = c.surface_points;
+    j["surface_facets"] = c.surface_facets;
+    j["shells"] = c.shells;
+    j["bodies"] = c.bodies;
   }
-}
-
-/// Estimates the job's nodes and peak memory, reports them, and refuses the job (ResourceError)
-/// when the estimate exceeds its memory limit — before anything large is allocated.
-template <class Log>
-void check_memory_estimate(const MeshJob& job, const PreparedSurface& surface, const SurfaceQuery& query,
-                           const SizingField& sizing, nlohmann::json& j, const Log& log) {
-  Stopwatch clock;
-  const double limit = effective_memory_limit(job.max_memory);
-  // Beyond twice the limit the exact excess does not matter: stop integrating there.
-  const double cap = limit > 0 ? std::max(1e6, 2 * limit / kBytesPerNode) : 2e9;
-  const ResourceEstimate e = estimate_resources(surface, query, sizing, cap);
-  j["seconds"]["estimate"] = clock.seconds();
-  char count[32];  // whole numbers while exact; beyond 2^53 (or non-finite) in scientific form
-  if (e.nodes < 9e15) std::snprintf(count, sizeof count, "%.0f", e.nodes);
-  else std::snprintf(count, sizeof count, "%.3g", e.nodes);
-  const std::string nodes = (e.capped ? "more than " : "~") + std::string(count);
-  const std::string limit_text = limit > 0 ? format_bytes(limit) : std::string("none");
-  j["estimate"] = {{"nodes", e.nodes}, {"surface_nodes", e.surface_nodes}, {"interior_nodes", e.interior_nodes},
-                   {"peak_bytes", e.peak_bytes}, {"capped", e.capped}, {"limit_bytes", limit}};
-  log("estimate: " + nodes + " nodes, " + (e.capped ? "more than " : "~") + format_bytes(e.peak_bytes) +
-      " peak memory (limit " + limit_text + ")");
-  if (limit > 0 && e.peak_bytes > limit)
-    throw ResourceError("job '" + job.name + "': needs an estimated " + (e.capped ? "more than " : "") +
-                        format_bytes(e.peak_bytes) + " of memory (" + nodes + " nodes) but the limit is " +
-                        limit_text + (job.max_memory > 0 ? " (max_memory / --max-memory)" : " (the machine's memory)") +
-                        "; use a larger size, or raise the limit with --max-memory (none = no limit)");
-}
-
-/// The automatic terms of a job, derived from its tolerances and its surface.
-struct AutoTerms {
-  double feature_angle = 0;      ///< degrees: the sharp angle, lowered to the crease angle
-  double chordal_deviation = 0;  ///< model units (0 = off)
-};
-
-AutoTerms automatic_terms(const MeshJob& job, const PreparedSurface& surface) {
-  AutoTerms t;
-  t.feature_angle = job.sharp_angle;
-  if (job.auto_creases && job.sharp_angle > 0) {
-    // A boundary face of length L across a crease of deviation a lies (L/4) sin a from the
-    // surface at the crease. With L up to 1.3 h and the mesher's own margin (0.8 x the
-    // tolerance), creases bent by more than asin(4 x 0.8 x tol / 1.3) must be kept by nodes.
-    const double s = std::min(1.0, 4 * 0.8 * job.check.hausdorff_tolerance / 1.3);
-    t.feature_angle = std::min(job.sharp_angle, std::asin(s) * 180 / std::numbers::pi);
+  if (r.has_features) {
+    j["feature_edges"] = c.feature_edges;
+    j["feature_corners"] = c.feature_corners;
   }
-  if (job.chordal_deviation > 0) {
-    t.chordal_deviation = job.chordal_deviation;
-  } else if (job.chordal_deviation < 0) {
-    // Half the volume tolerance spread as a mean depth over the whole surface area.
-    double area = 0;
-    const SurfaceMesh& sm = surface.mesh;
-    for (std::size_t f = 0; f < sm.num_tris(); ++f) {
-      const double *a = sm.points.p(sm.tri(f)[0]), *b = sm.points.p(sm.tri(f)[1]), *c = sm.points.p(sm.tri(f)[2]);
-      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-      const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      const double w[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-      area += std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) / 2;
-    }
-    if (area > 0 && std::isfinite(area))
-      t.chordal_deviation = 0.5 * job.check.volume_tolerance * std::fabs(surface.volume) / area;
+  if (r.has_estimate && c.placed_nodes) j["placed_nodes"] = c.placed_nodes;
+  if (r.has_mesh) {
+    j["nodes"] = c.nodes;
+    j["nodes_by_kind"] = {{"corner", c.nodes_by_kind[0]}, {"edge", c.nodes_by_kind[1]},
+                          {"surface", c.nodes_by_kind[2]}, {"interior", c.nodes_by_kind[3]}};
+    j["tets"] = c.tets;
+    j["boundary_faces"] = c.boundary_faces;
+    j["steiner_points"] = c.steiner_points;
+    j["dropped_nodes"] = c.dropped_nodes;
+    j["buried_nodes"] = c.buried_nodes;
+    j["steiner_rounds"] = c.steiner_rounds;
+    j["refinements"] = c.refinements;
   }
-  return t;
-}
-
-/// The volume mesh of a job, improved and checked, with the sizing field it was made with.
-struct Meshed {
-  SizingField sizing;
-  VolumeMesh mesh;
-  MeshCheck check;
-};
-
-/// Adds a point zone of half the local size at each place of `where` (3 coordinates each)
-/// whose local size is still above min_size; returns how many it added.
-std::size_t refine_at(const std::vector<double>& where, const SizingField& sizing, SizingOptions& o) {
-  std::size_t added = 0;
-  const double floor = sizing.min_size();
-  for (std::size_t k = 0; k + 2 < where.size(); k += 3) {
-    const double h = sizing(&where[k]);
-    if (!(h > floor * (1 + 1e-9))) continue;
-    SizingZone z;
-    z.kind = SizingZone::Kind::point;
-    z.name = "refinement";
-    z.size = std::max(floor, h / 2);
-    z.coords.assign(where.begin() + std::ptrdiff_t(k), where.begin() + std::ptrdiff_t(k) + 3);
-    o.zones.push_back(std::move(z));
-    ++added;
+  if (r.has_groups || r.boundary) {
+    j["patches"] = c.patches;
+    j["curves"] = c.curves;
+    j["mesh_feature_edges"] = c.mesh_feature_edges;
   }
-  return added;
+  return j;
 }
 
-std::string first_place(const std::vector<double>& where) {
-  std::ostringstream m;
-  m.precision(9);
-  if (where.size() >= 3) m << " (e.g. at (" << where[0] << ", " << where[1] << ", " << where[2] << "))";
-  return m.str();
-}
-
-/// Sizing field, nodes, volume mesh, improvement and mesh check; where the boundary cannot be
-/// recovered or the check finds the boundary too far from the surface, the size is halved
-/// around those places and everything from the sizing field on is done again (at most
-/// job.max_refinements times). Throws what the last attempt threw, or CheckError is left to
-/// the caller through Meshed::check.
-template <class Notice>
-Meshed mesh_with_refinement(const MeshJob& job, const PreparedSurface& surface, const SurfaceQuery& query,
-                            const FeatureEdges& features, SizingOptions options, const MeshJobCallbacks& cb,
-                            nlohmann::json& j, const Notice& notice) {
-  auto log = [&](const std::string& s) {
-    if (cb.log) cb.log(s);
-  };
-  auto progress = [&](const std::string& stage, double f) {
-    if (cb.progress) cb.progress(stage, f);
-  };
-  nlohmann::json& sec = j["seconds"];
-  nlohmann::json& counts = j["counts"];
-  auto add_seconds = [&](const char* key, double t) { sec[key] = sec.value(key, 0.0) + t; };
-  const std::size_t user_zones = options.zones.size();
-  for (int attempt = 0;; ++attempt) {
-    Stopwatch clock;
-    log("sizing field (" + std::to_string(user_zones) + " zones" +
-        (attempt ? ", " + std::to_string(options.zones.size() - user_zones) + " refinement points" : std::string()) + ")");
-    Meshed m;
-    m.sizing = build_sizing_field(surface.mesh, options);
-    add_seconds("sizing", clock.seconds());
-    if (attempt == 0) {
-      const SizingAutoStats& a = m.sizing.auto_stats();
-      j["automatic_sizing"] = {{"curvature_angle", options.curvature_angle_deg},
-                               {"chordal_deviation", options.chordal_deviation},
-                               {"feature_angle", options.feature_angle_deg},
-                               {"curvature_places", a.curvature_places},
-                               {"min_curvature_size", a.min_curvature_size},
-                               {"min_radius", a.min_radius}};
-      if (a.curvature_places > 0) {
-        std::ostringstream n;
-        n.precision(4);
-        n << "curvature: the size is reduced to as little as " << a.min_curvature_size << " along "
-          << a.curvature_places << " place(s) of the curved surface (radius of curvature down to " << a.min_radius
-          << "; curvature_angle " << options.curvature_angle_deg << " deg, chordal deviation "
-          << options.chordal_deviation << ")";
-        notice(n.str());
-      }
-    }
-    check_memory_estimate(job, surface, query, m.sizing, j, log);
-
-    clock.reset();
-    log("placing nodes");
-    PlacementOptions po;
-    po.seed = job.seed;
-    po.progress = progress;
-    NodeSet nodes = place_nodes(surface, query, features, m.sizing, po);
-    add_seconds("place", clock.seconds());
-    counts["placed_nodes"] = nodes.points.size();
-
-    clock.reset();
-    log("meshing " + std::to_string(nodes.points.size()) + " nodes (order " +
-        std::string(order_kind_name(job.order.kind)) + ")");
-    VolumeMeshOptions vo;
-    vo.order = job.order;
-    vo.order.seed = job.seed;
-    vo.progress = progress;
-    vo.hausdorff_tolerance = job.check.hausdorff_tolerance;
-    try {
-      m.mesh = mesh_volume(surface, query, m.sizing, std::move(nodes), vo);
-    } catch (const BoundaryRecoveryError& e) {
-      add_seconds("mesh", clock.seconds());
-      const std::size_t added = attempt < job.max_refinements ? refine_at(e.where(), m.sizing, options) : 0;
-      if (added == 0)
-        throw GeometryError(std::string(e.what()) +
-                            (attempt < job.max_refinements
-                                 ? "; the size there is already min_size " + std::to_string(m.sizing.min_size())
-                                 : "; after " + std::to_string(attempt) + " local refinement(s)"));
-      notice("boundary recovery did not converge at " + std::to_string(e.where().size() / 3) + " place(s)" +
-             first_place(e.where()) + ": size halved around " + std::to_string(added) +
-             " of them, meshing again (refinement " + std::to_string(attempt + 1) + ")");
-      continue;
-    }
-    add_seconds("mesh", clock.seconds());
-    const VolumeMeshStats& ms = m.mesh.stats;
-    sec["mesh_stages"] = {{"order", ms.order_seconds},
-                          {"delaunay", ms.delaunay_seconds},
-                          // the first, full tetrahedralization alone (the "Delaunay time")
-                          {"first_delaunay", ms.delaunay.seconds},
-                          {"classify", ms.classify_seconds},
-                          {"recover", ms.recover_seconds}};
-    // What the written mesh holds: counted again after the quality pass, whose splits add
-    // interior nodes and whose cap removals change the boundary (the summary had said 274382
-    // nodes for a gear box deck of 274384).
-    auto count_mesh = [&] {
-      std::array<std::size_t, 4> by_kind{};
-      for (NodeKind k : m.mesh.nodes.kind) ++by_kind[std::size_t(k) & 3];
-      counts["nodes"] = m.mesh.nodes.points.size();
-      counts["nodes_by_kind"] = {{"corner", by_kind[0]}, {"edge", by_kind[1]},
-                                 {"surface", by_kind[2]}, {"interior", by_kind[3]}};
-      counts["tets"] = m.mesh.num_tets();
-      counts["boundary_faces"] = m.mesh.boundary.size() / 3;
-    };
-    count_mesh();
-    counts["steiner_points"] = ms.steiner_points;
-    counts["dropped_nodes"] = ms.dropped_nodes;
-    counts["buried_nodes"] = ms.buried_nodes;
-    counts["steiner_rounds"] = ms.rounds;
-    counts["refinements"] = attempt;
-
-    if (job.improve) {
-      clock.reset();
-      log("improving " + std::to_string(m.mesh.num_tets()) + " tets");
-      ImproveOptions io;
-      io.measure_stages = false;  // the quality block measures the result
-      io.progress = progress;
-      io.hausdorff_tolerance = job.check.hausdorff_tolerance;
-      io.feature_angle = options.feature_angle_deg;
-      const ImproveStats imp = improve_mesh(m.mesh, surface, query, m.sizing, io);
-      add_seconds("improve", clock.seconds());
-      count_mesh();
-      j["improve"] = {{"edge_removals", imp.edge_removals}, {"face_removals", imp.face_removals},
-                      {"relaxed", imp.relaxed}, {"smoothed", imp.smoothed},
-                      {"boundary_changes", imp.boundary_changes}, {"caps_removed", imp.caps_removed}, {"splits", imp.splits},
-                      {"boundary_splits", imp.boundary_splits}, {"insertions", imp.insertions},
-                      {"rounds", imp.rounds},
-                      {"boundary_flips", imp.boundary_flips}};
-    }
-
-    clock.reset();
-    log("checking the mesh");
-    m.check = check_volume_mesh(m.mesh, surface, query, m.sizing, job.check);
-    add_seconds("mesh_check", clock.seconds());
-    if (m.check.ok() || !m.check.only_sizing_failures()) return m;
-    const std::size_t added = attempt < job.max_refinements ? refine_at(m.check.refine_at, m.sizing, options) : 0;
-    if (added == 0) return m;  // the caller reports the failed check
-    notice("the mesh check found the boundary too far from the surface at " +
-           std::to_string(m.check.refine_at.size() / 3) + " place(s)" + first_place(m.check.refine_at) +
-           (m.check.volume_off ? " (volume off by " + std::to_string(100 * m.check.volume_error) + "%)" : std::string()) +
-           ": size halved around " + std::to_string(added) + " of them, meshing again (refinement " +
-           std::to_string(attempt + 1) + ")");
-  }
-}
-
-/// The pipeline; fills `j` as it goes, so a failure still reports what was measured. Throws.
+/// Reads the surface, runs the front door, checks the nodes' Delaunay tetrahedralization when
+/// asked, and writes the outputs; fills `j` as it goes, so a failure still reports what was
+/// measured. Throws.
 void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json& j) {
   auto log = [&](const std::string& s) {
     if (cb.log) cb.log(s);
   };
-  if (!(job.scale > 0)) throw UsageError("job '" + job.name + "': scale must be > 0");
-  if (!(job.sizing.max_size > 0)) throw UsageError("job '" + job.name + "': size must be > 0");
-  check_option_ranges(job);  // before any work: numbers in the range the pipeline computes in
-  check_job_paths(job);      // outputs may be written, none is an input or shared
+  MeshParams params = job;
+  params.fe_groups = !job.msh.empty() || !job.inp.empty() || !job.medit.empty() || !job.boundary_vtu.empty();
+  if (!(params.scale > 0)) throw UsageError("job '" + job.name + "': scale must be > 0");
+  if (!(params.sizing.max_size > 0)) throw UsageError("job '" + job.name + "': size must be > 0");
+  check_option_ranges(params);  // before any work: numbers in the range the pipeline computes in
+  check_job_paths(job);         // outputs may be written, none is an input or shared
   Stopwatch total, clock;
-  nlohmann::json& sec = j["seconds"];
-  nlohmann::json& counts = j["counts"];
   j["notices"] = nlohmann::json::array();
 
   log("reading " + job.input);
   SurfaceMesh raw = read_surface(job.input);
-  sec["read"] = clock.seconds();
-  // Coordinates after scaling, sizes against the model; the default min_size is raised to
-  // the smallest the mesher resolves.
-  const ModelRanges ranges = check_model_ranges(job, raw);
-
-  clock.reset();
-  log("preparing the surface (" + std::to_string(raw.points.size()) + " points, " +
-      std::to_string(raw.num_tris()) + " facets)");
-  auto notice = [&](const std::string& n) {
-    j["notices"].push_back(n);
-    log("notice: " + n);
-  };
-  if (!ranges.note.empty()) notice(ranges.note);
-  SurfaceOptions so;
-  so.scale = job.scale;
-  so.notice = notice;
-  if (job.repair.any()) {
-    SurfaceRepairReport rep;
-    raw = repair_surface(std::move(raw), job.repair, rep);
-    j["repairs"] = {{"removed_collapsed", rep.removed_collapsed}, {"split_caps", rep.split_caps},
-                    {"removed_duplicates", rep.removed_duplicates}, {"flipped", rep.flipped}};
-    for (const std::string& n : rep.notes) so.notice(n);
-    if (rep.changed()) so.notice("facet ids in later messages refer to the repaired surface");
+  const double read_seconds = clock.seconds();
+  MeshReport report;
+  MeshResult result;
+  try {
+    result = mesh_solid(std::move(raw), params, cb, &report);
+  } catch (...) {
+    report.seconds["read"] = read_seconds;
+    add_report_json(report, nullptr, j);
+    throw;
   }
-  const PreparedSurface surface = prepare_with_hint(std::move(raw), job, so);
-  sec["prepare"] = clock.seconds();
-  counts["surface_points"] = surface.mesh.points.size();
-  counts["surface_facets"] = surface.mesh.num_tris();
-  counts["shells"] = surface.shell_body.size();
-  counts["bodies"] = surface.num_bodies;
-  j["solid_volume"] = surface.volume;
-  j["bbox"] = {{"min", {surface.bbox_min[0], surface.bbox_min[1], surface.bbox_min[2]}},
-               {"max", {surface.bbox_max[0], surface.bbox_max[1], surface.bbox_max[2]}}};
+  report.seconds["read"] = read_seconds;
+  const VolumeMesh& mesh = result.mesh;
 
-  clock.reset();
-  const AutoTerms terms = automatic_terms(job, surface);
-  {
-    std::ostringstream m;
-    m << "sharp features (angle " << terms.feature_angle << " deg)";
-    log(m.str());
-  }
-  const FeatureEdges features = detect_sharp_edges(surface.mesh, terms.feature_angle);
-  sec["features"] = clock.seconds();
-  counts["feature_edges"] = features.num_edges();
-  counts["feature_corners"] = features.corners.size();
-  if (terms.feature_angle < job.sharp_angle) {
-    const std::size_t sharp = detect_sharp_edges(surface.mesh, job.sharp_angle).num_edges();
-    if (features.num_edges() > sharp) {
-      std::ostringstream m;
-      m << "creases: " << features.num_edges() - sharp << " surface edge(s) bent by "
-        << terms.feature_angle << " to " << job.sharp_angle
-        << " deg are kept as feature edges (a boundary face across them would lie farther than "
-        << job.check.hausdorff_tolerance << " h from the surface); auto_creases: false turns this off";
-      notice(m.str());
-    }
-  }
-
-  clock.reset();
-  const SurfaceQuery query(surface.mesh);
-  sec["query"] = clock.seconds();
-
-  SizingOptions sizing_options = job.sizing;
-  sizing_options.max_size = ranges.size;
-  sizing_options.min_size = ranges.min_size;
-  sizing_options.curvature_angle_deg = job.curvature_angle;
-  sizing_options.chordal_deviation = terms.chordal_deviation;
-  sizing_options.feature_angle_deg = terms.feature_angle;
-  if (job.thickness_layers > 0) {
-    clock.reset();
-    ThicknessOptions to;
-    to.layers = job.thickness_layers;
-    to.max_size = ranges.size;
-    const ThicknessStats ts = add_thickness_sizes(surface, query, to, sizing_options.derived);
-    sec["thickness"] = clock.seconds();
-    j["thickness"] = {{"walls", ts.walls}, {"gaps", ts.gaps}, {"min_wall", ts.min_wall}, {"min_gap", ts.min_gap}};
-    if (ts.walls + ts.gaps > 0) {
-      std::ostringstream n;
-      n.precision(4);
-      n << "thickness: the size is reduced";
-      if (ts.walls) n << " across " << ts.walls << " facet(s) of walls thinner than " << job.thickness_layers
-                      << " x size (thinnest " << ts.min_wall << ")";
-      if (ts.gaps) n << (ts.walls ? " and" : "") << " along " << ts.gaps << " facet(s) facing a gap narrower than the size (narrowest "
-                     << ts.min_gap << ")";
-      n << "; thickness_layers: 0 turns this off";
-      notice(n.str());
-    }
-  }
-  Meshed m = mesh_with_refinement(job, surface, query, features, sizing_options, cb, j, notice);
-  VolumeMesh& mesh = m.mesh;
-  const MeshCheck& check = m.check;
-  const SizingField& sizing = m.sizing;
-  j["mesh_check"] = mesh_check_json(check);
-
-  bool delaunay_ok = true;
   if (job.check_tetgen || job.check_delaunay) {
     clock.reset();
     log("checking the Delaunay tetrahedralization of the nodes");
     DelaunayVerification v = check_nodes_delaunay(job, mesh.nodes.points, log);
-    delaunay_ok = v.pass;
+    report.seconds["delaunay_check"] = clock.seconds();
     j["delaunay_check"] = std::move(v.json);
     j["delaunay_check"]["report"] = v.report;
-    sec["delaunay_check"] = clock.seconds();
-  }
-
-  clock.reset();
-  TetMesh tm = to_tet_mesh(mesh);
-  const QualitySummary q = summarize_quality(tm);
-  j["quality"] = quality_json(q);
-  j["size_fidelity"] = size_fidelity_json(measure_size_fidelity(mesh.nodes.points, mesh.tets, sizing));
-  sec["quality"] = clock.seconds();
-
-  if (!check.ok()) {
-    std::string what = "job '" + job.name + "': the mesh failed its validity check:";
-    for (const std::string& f : check.failures) what += "\n  " + f;
-    throw CheckError(what + "\nno output was written");
-  }
-  if (!delaunay_ok)
-    throw CheckError("job '" + job.name +
-                     "': the Delaunay tetrahedralization of the nodes failed its check:\n" +
-                     j["delaunay_check"]["report"].get<std::string>() + "no output was written");
-
-  // Solver formats: boundary patches and feature curves, named groups, optional quadratic nodes.
-  FeMesh fe;
-  const bool solver_formats =
-      !job.msh.empty() || !job.inp.empty() || !job.medit.empty() || !job.boundary_vtu.empty();
-  if (solver_formats) {
-    clock.reset();
-    log("boundary groups");
-    const SurfacePatches patches = segment_surface(surface.mesh, features);
-    const BoundaryGroups bg = assign_boundary(mesh, surface.mesh, patches, query);
-    counts["patches"] = patches.num_patches;
-    counts["curves"] = patches.num_curves();
-    counts["mesh_feature_edges"] = bg.edge_curve.size();
-    j["boundary"] = {{"pass", bg.ok()}, {"topological_faces", bg.topological_faces},
-                     {"geometric_faces", bg.geometric_faces}, {"verified_faces", bg.verified_faces},
-                     {"ambiguous_faces", bg.ambiguous_faces.size()},
-                     {"missing_curve_edges", bg.missing_curve_edges}, {"stray_patch_edges", bg.stray_patch_edges},
-                     {"empty_patches", bg.empty_patches}, {"empty_curves", bg.empty_curves},
-                     {"problems", bg.problems}};
-    if (!bg.ok()) {
-      std::string what = "job '" + job.name + "': the boundary groups are not certain:";
-      for (const std::string& p : bg.problems) what += "\n  " + p;
-      throw CheckError(what + "\nno output was written");
+    if (!v.pass) {
+      add_report_json(report, nullptr, j);
+      throw CheckError("job '" + job.name +
+                       "': the Delaunay tetrahedralization of the nodes failed its check:\n" +
+                       j["delaunay_check"]["report"].get<std::string>() + "no output was written");
     }
-    fe = make_fe_mesh(mesh, bg, make_groups(job.groups, surface.mesh, patches, job.sizing.zones,
-                                            surface.num_bodies, job.group_options));
-    j["groups"] = groups_json(fe);
-    if (job.element_order == 2) {
-      log("quadratic elements");
-      const QuadraticStats qs = make_quadratic(fe, surface.mesh, query, patches);
-      j["quadratic"] = {{"mid_nodes", qs.mid_nodes}, {"moved", qs.moved_mid_nodes},
-                        {"reduced_elements", qs.reduced_elements},
-                        {"straightened_elements", qs.straightened_elements},
-                        {"far_projections", qs.far_projections}, {"min_jacobian_ratio", qs.min_jacobian_ratio}};
-    }
-    sec["groups"] = clock.seconds();
   }
+  add_report_json(report, params.fe_groups ? &result.fe : nullptr, j);
+  nlohmann::json& sec = j["seconds"];
+  const FeMesh& fe = result.fe;
 
   // Outputs: every file to a temporary first; all renamed into place (all or nothing) only once
   // all are written. Errors name the user's path, not the temporary one.
@@ -676,7 +332,7 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
       throw OutputError(path, e.reason());
     }
   };
-  output(job.vtu, "vtu", [&](const std::string& t) { write_vtu(tm, t); });
+  output(job.vtu, "vtu", [&](const std::string& t) { write_vtu(result.tet_mesh, t); });
   output(job.nodes, "nodes", [&](const std::string& t) { write_xyz(mesh.nodes.points, t); });
   output(job.msh, "msh", [&](const std::string& t) {
     MshOptions mo;
@@ -706,6 +362,65 @@ std::vector<std::string> output_paths(const MeshJob& job) {
   for (const std::string* p : {&job.vtu, &job.summary, &job.nodes, &job.msh, &job.inp, &job.medit, &job.boundary_vtu})
     if (!p->empty()) paths.push_back(*p);
   return paths;
+}
+
+void add_report_json(const MeshReport& r, const FeMesh* fe, nlohmann::json& j) {
+  j["counts"] = counts_json(r);
+  nlohmann::json& sec = j["seconds"];
+  for (const auto& [k, v] : r.seconds) sec[k] = v;
+  if (!r.mesh_stages.empty()) {
+    nlohmann::json stages = nlohmann::json::object();
+    for (const auto& [k, v] : r.mesh_stages) stages[k] = v;
+    sec["mesh_stages"] = stages;
+  }
+  nlohmann::json notices = nlohmann::json::array();
+  for (const std::string& n : r.notices) notices.push_back(n);
+  j["notices"] = notices;
+  if (r.has_surface) {
+    j["solid_volume"] = r.solid_volume;
+    j["bbox"] = {{"min", r.bbox_min}, {"max", r.bbox_max}};
+  }
+  if (r.repairs)
+    j["repairs"] = {{"removed_collapsed", r.repairs->removed_collapsed}, {"split_caps", r.repairs->split_caps},
+                    {"removed_duplicates", r.repairs->removed_duplicates}, {"flipped", r.repairs->flipped}};
+  if (r.has_auto_sizing)
+    j["automatic_sizing"] = {{"curvature_angle", r.curvature_angle},
+                             {"chordal_deviation", r.chordal_deviation},
+                             {"feature_angle", r.feature_angle},
+                             {"curvature_places", r.auto_sizing.curvature_places},
+                             {"min_curvature_size", r.auto_sizing.min_curvature_size},
+                             {"min_radius", r.auto_sizing.min_radius}};
+  if (r.thickness)
+    j["thickness"] = {{"walls", r.thickness->walls}, {"gaps", r.thickness->gaps},
+                      {"min_wall", r.thickness->min_wall}, {"min_gap", r.thickness->min_gap}};
+  if (r.has_estimate) {
+    const ResourceEstimate& e = r.estimate;
+    j["estimate"] = {{"nodes", e.nodes}, {"surface_nodes", e.surface_nodes}, {"interior_nodes", e.interior_nodes},
+                     {"peak_bytes", e.peak_bytes}, {"capped", e.capped}, {"limit_bytes", r.memory_limit}};
+  }
+  if (r.improve) j["improve"] = improve_json(*r.improve);
+  if (r.has_check) j["mesh_check"] = mesh_check_json(r.check);
+  if (r.has_quality) {
+    j["quality"] = quality_json(r.quality);
+    j["size_fidelity"] = size_fidelity_json(r.size_fidelity);
+  }
+  if (r.boundary) {
+    const BoundaryGroupsSummary& b = *r.boundary;
+    j["boundary"] = {{"pass", b.pass}, {"topological_faces", b.topological_faces},
+                     {"geometric_faces", b.geometric_faces}, {"verified_faces", b.verified_faces},
+                     {"ambiguous_faces", b.ambiguous_faces},
+                     {"missing_curve_edges", b.missing_curve_edges}, {"stray_patch_edges", b.stray_patch_edges},
+                     {"empty_patches", b.empty_patches}, {"empty_curves", b.empty_curves},
+                     {"problems", b.problems}};
+  }
+  if (fe && r.has_groups) j["groups"] = groups_json(*fe);
+  if (r.quadratic) {
+    const QuadraticStats& qs = *r.quadratic;
+    j["quadratic"] = {{"mid_nodes", qs.mid_nodes}, {"moved", qs.moved_mid_nodes},
+                      {"reduced_elements", qs.reduced_elements},
+                      {"straightened_elements", qs.straightened_elements},
+                      {"far_projections", qs.far_projections}, {"min_jacobian_ratio", qs.min_jacobian_ratio}};
+  }
 }
 
 MeshJobResult run_mesh_job(const MeshJob& job, const MeshJobCallbacks& callbacks) {
