@@ -19,8 +19,8 @@
 // against the bytes that remain BEFORE anything is allocated from it, and errors are typed.
 // kdmesh therefore does not link OpenMesh.
 //
-// Welding: points with bit-identical coordinates (after mapping -0.0 to +0.0) become one
-// point, through an open-addressing hash table (O(n)); facets keep file order and orientation.
+// Welding (io/point_welder.h): points with bit-identical coordinates (after mapping -0.0 to
+// +0.0) become one point; facets keep file order and orientation.
 #include "io/surface_io.h"
 
 #include <algorithm>
@@ -38,6 +38,8 @@
 #include "core/error.h"
 #include "io/file_io.h"
 #include "io/ply_format.h"
+#include "io/point_welder.h"
+#include "io/polygon_faces.h"
 
 namespace kdmesh {
 
@@ -53,68 +55,6 @@ std::string read_surface_file(const std::string& path) {
   if (data.empty()) throw InputError(path, 0, "empty file");
   return data;
 }
-
-// ---------------------------------------------------------------------------------------------
-// Welding
-// ---------------------------------------------------------------------------------------------
-
-/// Maps coordinates to point ids; identical coordinates (bitwise, -0.0 == +0.0) share an id.
-class Welder {
- public:
-  explicit Welder(PointSet& out, std::size_t expected) : out_(out) {
-    std::size_t cap = 16;
-    while (cap < 2 * expected) cap *= 2;
-    slots_.assign(cap, kEmpty);
-    out_.xyz.reserve(3 * expected);
-  }
-
-  std::uint32_t add(double x, double y, double z) {
-    const std::uint64_t k[3] = {bits(x), bits(y), bits(z)};
-    std::uint64_t h = k[0] * 0x9E3779B97F4A7C15ull;
-    h ^= (h >> 29) ^ (k[1] * 0xC2B2AE3D27D4EB4Full);
-    h ^= (h >> 31) ^ (k[2] * 0x165667B19E3779F9ull);
-    h ^= h >> 33;
-    std::size_t mask = slots_.size() - 1;
-    for (std::size_t i = h & mask;; i = (i + 1) & mask) {
-      const std::uint32_t id = slots_[i];
-      if (id == kEmpty) {
-        const std::size_t n = out_.size();
-        if (n >= kEmpty) throw std::length_error("more than 2^32-1 distinct points");
-        out_.push_back(x == 0 ? 0.0 : x, y == 0 ? 0.0 : y, z == 0 ? 0.0 : z);
-        slots_[i] = std::uint32_t(n);
-        if (2 * (n + 1) > slots_.size()) grow();
-        return std::uint32_t(n);
-      }
-      const double* p = out_.p(id);
-      if (bits(p[0]) == k[0] && bits(p[1]) == k[1] && bits(p[2]) == k[2]) return id;
-    }
-  }
-
- private:
-  static constexpr std::uint32_t kEmpty = 0xFFFFFFFFu;
-  static std::uint64_t bits(double v) { return std::bit_cast<std::uint64_t>(v == 0 ? 0.0 : v); }
-
-  void grow() {
-    std::vector<std::uint32_t> old(slots_.size() * 2, kEmpty);
-    old.swap(slots_);
-    const std::size_t mask = slots_.size() - 1;
-    for (std::uint32_t id : old) {
-      if (id == kEmpty) continue;
-      const double* p = out_.p(id);
-      const std::uint64_t k[3] = {bits(p[0]), bits(p[1]), bits(p[2])};
-      std::uint64_t h = k[0] * 0x9E3779B97F4A7C15ull;
-      h ^= (h >> 29) ^ (k[1] * 0xC2B2AE3D27D4EB4Full);
-      h ^= (h >> 31) ^ (k[2] * 0x165667B19E3779F9ull);
-      h ^= h >> 33;
-      std::size_t i = h & mask;
-      while (slots_[i] != kEmpty) i = (i + 1) & mask;
-      slots_[i] = id;
-    }
-  }
-
-  PointSet& out_;
-  std::vector<std::uint32_t> slots_;
-};
 
 // ---------------------------------------------------------------------------------------------
 // Token scanning (ascii STL and ascii PLY data): whitespace-separated tokens with line numbers
@@ -196,7 +136,7 @@ SurfaceMesh read_stl_binary(const std::string& path, std::string_view data) {
   const std::uint32_t count = load_le<std::uint32_t>(base + 80);
   SurfaceMesh mesh;
   mesh.tris.resize(3 * std::size_t(count));  // count was checked against the file size
-  Welder weld(mesh.points, std::size_t(count) / 2 + 3);
+  PointWelder weld(mesh.points, std::size_t(count) / 2 + 3);
   for (std::uint32_t f = 0; f < count; ++f) {
     const unsigned char* rec = base + 84 + 50 * std::size_t(f);
     for (int k = 0; k < 3; ++k) {
@@ -217,7 +157,7 @@ SurfaceMesh read_stl_ascii(const std::string& path, std::string_view data) {
   Tokens tok(data, 1);
   SurfaceMesh mesh;
   // A facet takes well over 60 bytes of text ("facet normal 0 0 0 outer loop vertex 0 0 0 ...").
-  Welder weld(mesh.points, data.size() / 120 + 3);
+  PointWelder weld(mesh.points, data.size() / 120 + 3);
   mesh.tris.reserve(3 * (data.size() / 60 + 1));
 
   auto expect = [&](std::string_view want, const char* context) {
@@ -290,118 +230,6 @@ SurfaceMesh read_stl_ascii(const std::string& path, std::string_view data) {
 // ---------------------------------------------------------------------------------------------
 // PLY
 // ---------------------------------------------------------------------------------------------
-
-/// Triangulates the polygon `poly` (point ids into `xyz`, 3 doubles each) by ear clipping in
-/// its plane (projected along the largest component of its Newell normal), appending n - 2
-/// triangles with the polygon's orientation to `out`. A convex polygon gives its fan from the
-/// first vertex. False (nothing appended) when no ear is found: a self-intersecting or
-/// degenerate polygon.
-bool ear_clip(const std::vector<std::uint32_t>& poly, const std::vector<double>& xyz, std::uint32_t* out) {
-  const std::size_t n = poly.size();
-  double nrm[3] = {0, 0, 0};
-  for (std::size_t i = 0; i < n; ++i) {
-    const double* a = &xyz[3 * std::size_t(poly[i])];
-    const double* b = &xyz[3 * std::size_t(poly[(i + 1) % n])];
-    nrm[0] += (a[1] - b[1]) * (a[2] + b[2]);
-    nrm[1] += (a[2] - b[2]) * (a[0] + b[0]);
-    nrm[2] += (a[0] - b[0]) * (a[1] + b[1]);
-  }
-  int drop = 0;
-  for (int k = 1; k < 3; ++k)
-    if (std::fabs(nrm[k]) > std::fabs(nrm[drop])) drop = k;
-  if (!(std::fabs(nrm[drop]) > 0)) return false;
-  const int ix = (drop + 1) % 3, iy = (drop + 2) % 3;
-  const double sign = nrm[drop] > 0 ? 1 : -1;  // counter-clockwise in the projection
-  auto x = [&](std::uint32_t v) { return xyz[3 * std::size_t(v) + std::size_t(ix)]; };
-  auto y = [&](std::uint32_t v) { return xyz[3 * std::size_t(v) + std::size_t(iy)]; };
-  auto cross = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
-    return sign * ((x(b) - x(a)) * (y(c) - y(a)) - (y(b) - y(a)) * (x(c) - x(a)));
-  };
-  std::vector<std::uint32_t> ring = poly;
-  std::size_t written = 0;
-  while (ring.size() > 3) {
-    bool clipped = false;
-    const std::size_t m = ring.size();
-    for (std::size_t k = 0; k < m && !clipped; ++k) {
-      const std::size_t i = (k + 1) % m;  // from the second vertex: a convex polygon gives its fan
-      const std::uint32_t a = ring[(i + m - 1) % m], b = ring[i], c = ring[(i + 1) % m];
-      if (!(cross(a, b, c) > 0)) continue;  // reflex or flat corner: not an ear
-      bool empty = true;
-      for (std::size_t k = 0; k < m && empty; ++k) {
-        const std::uint32_t p = ring[k];
-        if (p == a || p == b || p == c) continue;
-        empty = !(cross(a, b, p) >= 0 && cross(b, c, p) >= 0 && cross(c, a, p) >= 0);
-      }
-      if (!empty) continue;
-      out[written++] = a;
-      out[written++] = b;
-      out[written++] = c;
-      ring.erase(ring.begin() + long(i));
-      clipped = true;
-    }
-    if (!clipped) return false;
-  }
-  out[written++] = ring[0];
-  out[written++] = ring[1];
-  out[written++] = ring[2];
-  return true;
-}
-
-/// Collects faces (file vertex indices) and fan-triangulates them into `tris`; polygons of
-/// more than 3 vertices are remembered, to be triangulated properly (ear_clip) once the
-/// vertices are known.
-struct FaceSink {
-  const std::string& path;
-  std::uint64_t num_vertices;
-  std::vector<std::uint32_t>& tris;
-  std::vector<std::uint32_t> poly;
-  struct Polygon {
-    std::size_t first_tri;  ///< offset in tris of its fan
-    std::size_t begin, end; ///< its vertices in `polygon_vertices`
-  };
-  std::vector<Polygon> polygons;
-  std::vector<std::uint32_t> polygon_vertices;
-
-  /// Replaces each remembered polygon's fan by its ear-clipped triangulation (kept when the
-  /// polygon has no ear: prepare_surface then reports the fan's defects).
-  void triangulate_polygons(const std::vector<double>& xyz) {
-    std::vector<std::uint32_t> ring;
-    for (const Polygon& p : polygons) {
-      ring.assign(polygon_vertices.begin() + long(p.begin), polygon_vertices.begin() + long(p.end));
-      std::vector<std::uint32_t> out(3 * (ring.size() - 2));
-      if (ear_clip(ring, xyz, out.data())) std::copy(out.begin(), out.end(), tris.begin() + long(p.first_tri));
-    }
-  }
-
-  /// `where`: "line N" / "byte offset N" context for messages (built lazily by the caller).
-  template <class Where>
-  void finish(std::uint64_t face, std::uint64_t line, Where where) {
-    if (poly.size() < 3)
-      throw InputError(path, line,
-                       "face " + std::to_string(face) + " (0-based" + where() + ") has " +
-                           std::to_string(poly.size()) + " vertices; at least 3 are needed");
-    if (poly.size() > 3) {
-      polygons.push_back({tris.size(), polygon_vertices.size(), polygon_vertices.size() + poly.size()});
-      polygon_vertices.insert(polygon_vertices.end(), poly.begin(), poly.end());
-    }
-    for (std::size_t k = 1; k + 1 < poly.size(); ++k) {
-      tris.push_back(poly[0]);
-      tris.push_back(poly[k]);
-      tris.push_back(poly[k + 1]);
-    }
-    poly.clear();
-  }
-  template <class Where>
-  void index(std::int64_t v, std::uint64_t face, std::uint64_t line, Where where) {
-    if (v < 0 || std::uint64_t(v) >= num_vertices)
-      throw InputError(path, line,
-                       "face " + std::to_string(face) + " (0-based" + where() +
-                           "): vertex index " + std::to_string(v) + " is out of range (" +
-                           std::to_string(num_vertices) + " vertices)");
-    poly.push_back(std::uint32_t(v));
-  }
-};
-
 SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
   const PlyHeader h = parse_ply_header(path, data);
   const PlyElement* vert_el = nullptr;
@@ -560,14 +388,7 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
   if (mesh.tris.size() / 3 > 0xFFFFFFFFull) throw InputError(path, 0, "more than 2^32-1 triangles");
   sink.triangulate_polygons(raw);
 
-  // Weld and renumber.
-  const std::size_t nv = vert_el->count;
-  std::vector<std::uint32_t> remap(nv);
-  Welder weld(mesh.points, nv);
-  for (std::size_t i = 0; i < nv; ++i) remap[i] = weld.add(raw[3 * i], raw[3 * i + 1], raw[3 * i + 2]);
-  for (std::uint32_t& v : mesh.tris) v = remap[v];
-  // Points no facet uses (e.g. welded away or unreferenced in the file) are kept: the point
-  // ids are the welded file order; prepare_surface decides what unused points mean.
+  weld_file_vertices(raw, mesh);
   return mesh;
 }
 
