@@ -1,21 +1,52 @@
-// kdmesh — surface readers and writers: STL (ascii/binary) and PLY (ascii/binary LE/BE).
+// kdmesh — surface readers and writers: STL (ascii/binary) and PLY (ascii/binary LE/BE); the
+// dispatch by extension to the OBJ and OFF readers (io/obj_reader.cpp, io/off_reader.cpp).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 //
-// Why these readers are our own and not OpenMesh's (OpenMesh 9.0, Debian 12):
+// Why every reader is our own and none is OpenMesh's (OpenMesh 9.0-4, Debian 12):
 //   * OpenMesh's readers return a bool and print their reason to omerr; we need InputErrors
-//     naming the file and the line (ascii) or facet/byte offset (binary). A custom
+//     naming the file and the line (text) or facet/byte offset (binary). A custom
 //     BaseImporter sees vertices and faces, not the reader's position in the file.
-//   * Its STL reader welds vertices itself, through a map of float vectors compared with an
-//     epsilon (STLReader::set_epsilon), not by bit-identical coordinates (-0.0 == 0.0).
-//   * Its PLY reader hands the header's element counts to BaseImporter::reserve before any data
+//   * STL/PLY. Its STL reader welds vertices itself, through a map of float vectors compared
+//     with an epsilon (STLReader::set_epsilon), not by bit-identical coordinates (-0.0 == 0.0).
+//     Its PLY reader hands the header's element counts to BaseImporter::reserve before any data
 //     is read, so the sizes it trusts are the ones a lying header chooses; checking them
 //     against the file size first would mean re-parsing the header ourselves anyway.
-//   * Measured with OpenMesh::IO::read_mesh into a TriMesh (OpenMesh 9.0-4, 2026-11-21): a
-//     binary STL that declares 4,000,000,000 triangles and holds 1 returns true with 0 faces
-//     (a silent empty result), and three facets on one edge return true with the edge split by
-//     duplicated vertices (8 points instead of 5) and only "complex edge" on stderr; the
-//     validation below must see such defects, not a repaired copy.
-// So every format here is parsed from one in-memory copy of the file, every count is checked
+//     Measured with OpenMesh::IO::read_mesh into a TriMesh (2026-11-21): a binary STL that
+//     declares 4,000,000,000 triangles and holds 1 returns true with 0 faces (a silent empty
+//     result), and three facets on one edge return true with the edge split by duplicated
+//     vertices (8 points instead of 5) and only "complex edge" on stderr.
+//   * OBJ and OFF. Measured (2026-11-27) with a recording BaseImporter passed to
+//     IOManager().read (what a custom importer would get) and with read_mesh into a TriMesh:
+//       - both readers hand every vertex to add_vertex(Vec3f), never Vec3d: "v 0.1 0 0" arrives
+//         as 0.10000000149011612, and the distinct vertices 1.00000001 and 1.00000002 both
+//         arrive as 1, which the weld would then merge. Coordinates cannot be bit-identical to
+//         the file's (nor to the same surface read from PLY), whatever the importer does;
+//       - OBJ: "f 1 2 2" never reaches the importer (the reader drops it: 1 face of 2), so a
+//         degenerate facet that prepare_surface names in STL/PLY would vanish; "f 1 2 9" with
+//         4 vertices and "f 0 1 2" reach it as handles 8 and -1 with read() = true (the TriMesh
+//         drops the face with "invalid vertex index" on stderr and returns true). Negative
+//         indices, v/vt/vn references, comments and CRLF were read correctly. A non-manifold
+//         edge reaches the importer raw (3 faces); the TriMesh splits it (8 points for 5);
+//       - OFF: a face count of 40 over 4 face lines returns true with 40 faces (36 copies of
+//         the last line); a face count of 4,000,000,000 calls reserve(nF = 4e9) and then keeps
+//         producing phantom faces past the end of the file until std::bad_alloc (1.8 GB after
+//         12 s under a 2 GB limit; the OOM killer without one), a vertex count of 4e8 likewise;
+//         a comment line between "OFF" and the counts returns true with 0 vertices and 32,587
+//         empty faces. Out-of-range indices reach the importer unchecked.
+//     So the raw face list and exact coordinates are out of reach through OpenMesh, and the
+//     counts would have to be parsed and checked by us before it runs: OBJ and OFF are read by
+//     our own readers, with the same weld and polygon triangulation as PLY.
+//   * .om (OpenMesh's binary format) is not read at all. It stores OpenMesh's half-edge
+//     structure (a mesh OpenMesh has already repaired: it cannot hold a non-manifold edge), not
+//     the raw faces the validation must see. And its reader trusts the file: measured on a
+//     166-byte tetrahedron written by OpenMesh 9.0 and read into a PolyMesh with double points,
+//     a face count of 4e9 ends in std::bad_alloc after 15 s; a file cut at 100 or 140 bytes
+//     reads as true with 0 faces (and at 100, a wrong 4th vertex); one byte set to 0xFF at
+//     offset 116 gives a heap-buffer-overflow write in ImporterT::set_next under AddressSanitizer
+//     (with -DNDEBUG, as our Release builds; an assertion failure without it): of the 300 files
+//     with one byte after the 16-byte header set to 0xFF or 0x7F, 28 overflow the heap. A custom
+//     BaseImporter cannot take its place: with kernel() == nullptr the OM reader returns false.
+// So every format is parsed from one in-memory copy of the file, every count is checked
 // against the bytes that remain BEFORE anything is allocated from it, and errors are typed.
 // kdmesh therefore does not link OpenMesh.
 //
@@ -458,7 +489,16 @@ SurfaceMesh read_surface(const std::string& path) {
                  [](unsigned char c) { return char(std::tolower(c)); });
   if (ext == ".stl") return read_stl(path);
   if (ext == ".ply") return read_ply(path);
-  throw InputError(path, 0, "unknown surface file extension " + quote_token_printable(ext) + " (supported: .stl, .ply)");
+  if (ext == ".obj") return read_obj(path);
+  if (ext == ".off") return read_off(path);
+  if (ext == ".om")  // the measurement is in this file's header comment
+    throw InputError(path, 0,
+                     "OpenMesh .om files are not read: the format stores OpenMesh's half-edge structure, "
+                     "not the file's raw faces, and OpenMesh 9.0's reader trusts its indices; "
+                     "export the surface as .obj, .off or .ply");
+  std::string supported;
+  for (std::string_view e : kSurfaceExtensions) supported += (supported.empty() ? "" : ", ") + std::string(e);
+  throw InputError(path, 0, "unknown surface file extension " + quote_token_printable(ext) + " (supported: " + supported + ")");
 }
 
 SurfaceMesh read_stl(const std::string& path) {
