@@ -6,7 +6,8 @@
 // with the prefixes ST, C and N (texture coordinates, colours and normals after each vertex's
 // x y z: read past), then the counts "vertices faces [edges]" (on the keyword's line or the
 // next one; the edge count is ignored), then one vertex per line (x y z first) and one face per
-// line ("n i1 ... in", 0-based indices; a face colour after them is read past). '#' starts a
+// line ("n i1 ... in", 0-based indices; a face colour after them is read past). ModelNet's
+// "OFF490 518 0" (no blank after the keyword) is read as "OFF 490 518 0". '#' starts a
 // comment; blank lines, CRLF line ends and a UTF-8 byte order mark are accepted.
 // Refused with an InputError naming the line: binary OFF, 4OFF and nOFF (homogeneous or
 // n-dimensional vertices), counts the rest of the file cannot hold (checked BEFORE anything is
@@ -128,9 +129,16 @@ SurfaceMesh read_off(const std::string& path) {
 
   TextLines lines(text);
   if (!lines.next_nonblank()) throw InputError(path, lines.number(), "not an OFF file: no 'OFF' keyword");
-  check_off_keyword(path, lines, lines.token());
+  std::string_view key = lines.token(), first;
+  // "OFF490 518 0": the keyword and the vertex count run together in every OFF file of the
+  // ModelNet data sets; the digits are the count.
+  if (key.size() > 3 && (key[0] == 'O' || key[0] == 'o') && key.find_first_not_of("0123456789", 3) == std::string_view::npos) {
+    first = key.substr(3);
+    key = key.substr(0, 3);
+  }
+  check_off_keyword(path, lines, key);
   // The counts follow the keyword on its line (some writers) or start the next line.
-  std::string_view first = lines.token();
+  if (first.empty()) first = lines.token();
   if (first == "BINARY" || first == "binary")
     throw InputError(path, lines.number(), "binary OFF is not supported (only ascii OFF)");
   if (first.empty()) {

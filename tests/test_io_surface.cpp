@@ -341,14 +341,16 @@ TEST(SurfaceIoObjOff, DegenerateFacesAreKeptRaw) {
   EXPECT_EQ(off.tris, obj.tris);
 }
 
-// OFF variants: counts on the keyword's line, COFF/NOFF extra vertex values, face colours,
-// comments and blank lines (a comment before the counts broke OpenMesh 9's reader), CRLF.
+// OFF variants: counts on the keyword's line (also run together with it, as in ModelNet's
+// files), COFF/NOFF extra vertex values, face colours, comments and blank lines (a comment
+// before the counts broke OpenMesh 9's reader), CRLF, a byte order mark, "off" in lower case.
 TEST(SurfaceIoObjOff, OffVariants) {
   const SurfaceMesh plain = read_text("OFF\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
                                       "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n", ".off");
   ASSERT_EQ(plain.num_tris(), 4u);
   const std::string variants[] = {
       "OFF 4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
+      "OFF4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",  // as ModelNet's
       "# made by hand\r\nOFF\r\n# counts next\r\n\r\n4 4 6\r\n0 0 0\r\n1 0 0\r\n0 1 0\r\n0 0 1\r\n"
       "3 0 2 1\r\n3 0 1 3\r\n3 0 3 2\r\n3 1 2 3\r\n",
       "COFF\n4 4 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n0 0 1 9 9 9 9\n"
