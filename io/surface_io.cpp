@@ -1,26 +1,57 @@
-// kdmesh — surface readers and writers: STL (ascii/binary) and PLY (ascii/binary LE/BE).
+// kdmesh — surface readers and writers: STL (ascii/binary) and PLY (ascii/binary LE/BE); the
+// dispatch by extension to the OBJ and OFF readers (io/obj_reader.cpp, io/off_reader.cpp).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 //
-// Why these readers are our own and not OpenMesh's (OpenMesh 9.0, Debian 12):
+// Why every reader is our own and none is OpenMesh's (OpenMesh 9.0-4, Debian 12):
 //   * OpenMesh's readers return a bool and print their reason to omerr; we need InputErrors
-//     naming the file and the line (ascii) or facet/byte offset (binary). A custom
+//     naming the file and the line (text) or facet/byte offset (binary). A custom
 //     BaseImporter sees vertices and faces, not the reader's position in the file.
-//   * Its STL reader welds vertices itself, through a map of float vectors compared with an
-//     epsilon (STLReader::set_epsilon), not by bit-identical coordinates (-0.0 == 0.0).
-//   * Its PLY reader hands the header's element counts to BaseImporter::reserve before any data
+//   * STL/PLY. Its STL reader welds vertices itself, through a map of float vectors compared
+//     with an epsilon (STLReader::set_epsilon), not by bit-identical coordinates (-0.0 == 0.0).
+//     Its PLY reader hands the header's element counts to BaseImporter::reserve before any data
 //     is read, so the sizes it trusts are the ones a lying header chooses; checking them
 //     against the file size first would mean re-parsing the header ourselves anyway.
-//   * Measured with OpenMesh::IO::read_mesh into a TriMesh (OpenMesh 9.0-4, 2026-11-21): a
-//     binary STL that declares 4,000,000,000 triangles and holds 1 returns true with 0 faces
-//     (a silent empty result), and three facets on one edge return true with the edge split by
-//     duplicated vertices (8 points instead of 5) and only "complex edge" on stderr; the
-//     validation below must see such defects, not a repaired copy.
-// So every format here is parsed from one in-memory copy of the file, every count is checked
+//     Measured with OpenMesh::IO::read_mesh into a TriMesh (2026-11-21): a binary STL that
+//     declares 4,000,000,000 triangles and holds 1 returns true with 0 faces (a silent empty
+//     result), and three facets on one edge return true with the edge split by duplicated
+//     vertices (8 points instead of 5) and only "complex edge" on stderr.
+//   * OBJ and OFF. Measured (2026-11-27) with a recording BaseImporter passed to
+//     IOManager().read (what a custom importer would get) and with read_mesh into a TriMesh:
+//       - both readers hand every vertex to add_vertex(Vec3f), never Vec3d: "v 0.1 0 0" arrives
+//         as 0.10000000149011612, and the distinct vertices 1.00000001 and 1.00000002 both
+//         arrive as 1, which the weld would then merge. Coordinates cannot be bit-identical to
+//         the file's (nor to the same surface read from PLY), whatever the importer does;
+//       - OBJ: "f 1 2 2" never reaches the importer (the reader drops it: 1 face of 2), so a
+//         degenerate facet that prepare_surface names in STL/PLY would vanish; "f 1 2 9" with
+//         4 vertices and "f 0 1 2" reach it as handles 8 and -1 with read() = true (the TriMesh
+//         drops the face with "invalid vertex index" on stderr and returns true). Negative
+//         indices, v/vt/vn references, comments and CRLF were read correctly. A non-manifold
+//         edge reaches the importer raw (3 faces); the TriMesh splits it (8 points for 5);
+//       - OFF: a face count of 40 over 4 face lines returns true with 40 faces (36 copies of
+//         the last line); a face count of 4,000,000,000 calls reserve(nF = 4e9) and then keeps
+//         producing phantom faces past the end of the file until std::bad_alloc (1.8 GB after
+//         12 s under a 2 GB limit; the OOM killer without one), a vertex count of 4e8 likewise;
+//         a comment line between "OFF" and the counts returns true with 0 vertices and 32,587
+//         empty faces. Out-of-range indices reach the importer unchecked.
+//     So the raw face list and exact coordinates are out of reach through OpenMesh, and the
+//     counts would have to be parsed and checked by us before it runs: OBJ and OFF are read by
+//     our own readers, with the same weld and polygon triangulation as PLY.
+//   * .om (OpenMesh's binary format) is not read at all. It stores OpenMesh's half-edge
+//     structure (a mesh OpenMesh has already repaired: it cannot hold a non-manifold edge), not
+//     the raw faces the validation must see. And its reader trusts the file: measured on a
+//     166-byte tetrahedron written by OpenMesh 9.0 and read into a PolyMesh with double points,
+//     a face count of 4e9 ends in std::bad_alloc after 15 s; a file cut at 100 or 140 bytes
+//     reads as true with 0 faces (and at 100, a wrong 4th vertex); one byte set to 0xFF at
+//     offset 116 gives a heap-buffer-overflow write in ImporterT::set_next under AddressSanitizer
+//     (with -DNDEBUG, as our Release builds; an assertion failure without it): of the 300 files
+//     with one byte after the 16-byte header set to 0xFF or 0x7F, 28 overflow the heap. A custom
+//     BaseImporter cannot take its place: with kernel() == nullptr the OM reader returns false.
+// So every format is parsed from one in-memory copy of the file, every count is checked
 // against the bytes that remain BEFORE anything is allocated from it, and errors are typed.
 // kdmesh therefore does not link OpenMesh.
 //
-// Welding: points with bit-identical coordinates (after mapping -0.0 to +0.0) become one
-// point, through an open-addressing hash table (O(n)); facets keep file order and orientation.
+// Welding (io/point_welder.h): points with bit-identical coordinates (after mapping -0.0 to
+// +0.0) become one point; facets keep file order and orientation.
 #include "io/surface_io.h"
 
 #include <algorithm>
@@ -38,6 +69,8 @@
 #include "core/error.h"
 #include "io/file_io.h"
 #include "io/ply_format.h"
+#include "io/point_welder.h"
+#include "io/polygon_faces.h"
 
 namespace kdmesh {
 
@@ -53,68 +86,6 @@ std::string read_surface_file(const std::string& path) {
   if (data.empty()) throw InputError(path, 0, "empty file");
   return data;
 }
-
-// ---------------------------------------------------------------------------------------------
-// Welding
-// ---------------------------------------------------------------------------------------------
-
-/// Maps coordinates to point ids; identical coordinates (bitwise, -0.0 == +0.0) share an id.
-class Welder {
- public:
-  explicit Welder(PointSet& out, std::size_t expected) : out_(out) {
-    std::size_t cap = 16;
-    while (cap < 2 * expected) cap *= 2;
-    slots_.assign(cap, kEmpty);
-    out_.xyz.reserve(3 * expected);
-  }
-
-  std::uint32_t add(double x, double y, double z) {
-    const std::uint64_t k[3] = {bits(x), bits(y), bits(z)};
-    std::uint64_t h = k[0] * 0x9E3779B97F4A7C15ull;
-    h ^= (h >> 29) ^ (k[1] * 0xC2B2AE3D27D4EB4Full);
-    h ^= (h >> 31) ^ (k[2] * 0x165667B19E3779F9ull);
-    h ^= h >> 33;
-    std::size_t mask = slots_.size() - 1;
-    for (std::size_t i = h & mask;; i = (i + 1) & mask) {
-      const std::uint32_t id = slots_[i];
-      if (id == kEmpty) {
-        const std::size_t n = out_.size();
-        if (n >= kEmpty) throw std::length_error("more than 2^32-1 distinct points");
-        out_.push_back(x == 0 ? 0.0 : x, y == 0 ? 0.0 : y, z == 0 ? 0.0 : z);
-        slots_[i] = std::uint32_t(n);
-        if (2 * (n + 1) > slots_.size()) grow();
-        return std::uint32_t(n);
-      }
-      const double* p = out_.p(id);
-      if (bits(p[0]) == k[0] && bits(p[1]) == k[1] && bits(p[2]) == k[2]) return id;
-    }
-  }
-
- private:
-  static constexpr std::uint32_t kEmpty = 0xFFFFFFFFu;
-  static std::uint64_t bits(double v) { return std::bit_cast<std::uint64_t>(v == 0 ? 0.0 : v); }
-
-  void grow() {
-    std::vector<std::uint32_t> old(slots_.size() * 2, kEmpty);
-    old.swap(slots_);
-    const std::size_t mask = slots_.size() - 1;
-    for (std::uint32_t id : old) {
-      if (id == kEmpty) continue;
-      const double* p = out_.p(id);
-      const std::uint64_t k[3] = {bits(p[0]), bits(p[1]), bits(p[2])};
-      std::uint64_t h = k[0] * 0x9E3779B97F4A7C15ull;
-      h ^= (h >> 29) ^ (k[1] * 0xC2B2AE3D27D4EB4Full);
-      h ^= (h >> 31) ^ (k[2] * 0x165667B19E3779F9ull);
-      h ^= h >> 33;
-      std::size_t i = h & mask;
-      while (slots_[i] != kEmpty) i = (i + 1) & mask;
-      slots_[i] = id;
-    }
-  }
-
-  PointSet& out_;
-  std::vector<std::uint32_t> slots_;
-};
 
 // ---------------------------------------------------------------------------------------------
 // Token scanning (ascii STL and ascii PLY data): whitespace-separated tokens with line numbers
@@ -196,7 +167,7 @@ SurfaceMesh read_stl_binary(const std::string& path, std::string_view data) {
   const std::uint32_t count = load_le<std::uint32_t>(base + 80);
   SurfaceMesh mesh;
   mesh.tris.resize(3 * std::size_t(count));  // count was checked against the file size
-  Welder weld(mesh.points, std::size_t(count) / 2 + 3);
+  PointWelder weld(mesh.points, std::size_t(count) / 2 + 3);
   for (std::uint32_t f = 0; f < count; ++f) {
     const unsigned char* rec = base + 84 + 50 * std::size_t(f);
     for (int k = 0; k < 3; ++k) {
@@ -217,7 +188,7 @@ SurfaceMesh read_stl_ascii(const std::string& path, std::string_view data) {
   Tokens tok(data, 1);
   SurfaceMesh mesh;
   // A facet takes well over 60 bytes of text ("facet normal 0 0 0 outer loop vertex 0 0 0 ...").
-  Welder weld(mesh.points, data.size() / 120 + 3);
+  PointWelder weld(mesh.points, data.size() / 120 + 3);
   mesh.tris.reserve(3 * (data.size() / 60 + 1));
 
   auto expect = [&](std::string_view want, const char* context) {
@@ -290,118 +261,6 @@ SurfaceMesh read_stl_ascii(const std::string& path, std::string_view data) {
 // ---------------------------------------------------------------------------------------------
 // PLY
 // ---------------------------------------------------------------------------------------------
-
-/// Triangulates the polygon `poly` (point ids into `xyz`, 3 doubles each) by ear clipping in
-/// its plane (projected along the largest component of its Newell normal), appending n - 2
-/// triangles with the polygon's orientation to `out`. A convex polygon gives its fan from the
-/// first vertex. False (nothing appended) when no ear is found: a self-intersecting or
-/// degenerate polygon.
-bool ear_clip(const std::vector<std::uint32_t>& poly, const std::vector<double>& xyz, std::uint32_t* out) {
-  const std::size_t n = poly.size();
-  double nrm[3] = {0, 0, 0};
-  for (std::size_t i = 0; i < n; ++i) {
-    const double* a = &xyz[3 * std::size_t(poly[i])];
-    const double* b = &xyz[3 * std::size_t(poly[(i + 1) % n])];
-    nrm[0] += (a[1] - b[1]) * (a[2] + b[2]);
-    nrm[1] += (a[2] - b[2]) * (a[0] + b[0]);
-    nrm[2] += (a[0] - b[0]) * (a[1] + b[1]);
-  }
-  int drop = 0;
-  for (int k = 1; k < 3; ++k)
-    if (std::fabs(nrm[k]) > std::fabs(nrm[drop])) drop = k;
-  if (!(std::fabs(nrm[drop]) > 0)) return false;
-  const int ix = (drop + 1) % 3, iy = (drop + 2) % 3;
-  const double sign = nrm[drop] > 0 ? 1 : -1;  // counter-clockwise in the projection
-  auto x = [&](std::uint32_t v) { return xyz[3 * std::size_t(v) + std::size_t(ix)]; };
-  auto y = [&](std::uint32_t v) { return xyz[3 * std::size_t(v) + std::size_t(iy)]; };
-  auto cross = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
-    return sign * ((x(b) - x(a)) * (y(c) - y(a)) - (y(b) - y(a)) * (x(c) - x(a)));
-  };
-  std::vector<std::uint32_t> ring = poly;
-  std::size_t written = 0;
-  while (ring.size() > 3) {
-    bool clipped = false;
-    const std::size_t m = ring.size();
-    for (std::size_t k = 0; k < m && !clipped; ++k) {
-      const std::size_t i = (k + 1) % m;  // from the second vertex: a convex polygon gives its fan
-      const std::uint32_t a = ring[(i + m - 1) % m], b = ring[i], c = ring[(i + 1) % m];
-      if (!(cross(a, b, c) > 0)) continue;  // reflex or flat corner: not an ear
-      bool empty = true;
-      for (std::size_t k = 0; k < m && empty; ++k) {
-        const std::uint32_t p = ring[k];
-        if (p == a || p == b || p == c) continue;
-        empty = !(cross(a, b, p) >= 0 && cross(b, c, p) >= 0 && cross(c, a, p) >= 0);
-      }
-      if (!empty) continue;
-      out[written++] = a;
-      out[written++] = b;
-      out[written++] = c;
-      ring.erase(ring.begin() + long(i));
-      clipped = true;
-    }
-    if (!clipped) return false;
-  }
-  out[written++] = ring[0];
-  out[written++] = ring[1];
-  out[written++] = ring[2];
-  return true;
-}
-
-/// Collects faces (file vertex indices) and fan-triangulates them into `tris`; polygons of
-/// more than 3 vertices are remembered, to be triangulated properly (ear_clip) once the
-/// vertices are known.
-struct FaceSink {
-  const std::string& path;
-  std::uint64_t num_vertices;
-  std::vector<std::uint32_t>& tris;
-  std::vector<std::uint32_t> poly;
-  struct Polygon {
-    std::size_t first_tri;  ///< offset in tris of its fan
-    std::size_t begin, end; ///< its vertices in `polygon_vertices`
-  };
-  std::vector<Polygon> polygons;
-  std::vector<std::uint32_t> polygon_vertices;
-
-  /// Replaces each remembered polygon's fan by its ear-clipped triangulation (kept when the
-  /// polygon has no ear: prepare_surface then reports the fan's defects).
-  void triangulate_polygons(const std::vector<double>& xyz) {
-    std::vector<std::uint32_t> ring;
-    for (const Polygon& p : polygons) {
-      ring.assign(polygon_vertices.begin() + long(p.begin), polygon_vertices.begin() + long(p.end));
-      std::vector<std::uint32_t> out(3 * (ring.size() - 2));
-      if (ear_clip(ring, xyz, out.data())) std::copy(out.begin(), out.end(), tris.begin() + long(p.first_tri));
-    }
-  }
-
-  /// `where`: "line N" / "byte offset N" context for messages (built lazily by the caller).
-  template <class Where>
-  void finish(std::uint64_t face, std::uint64_t line, Where where) {
-    if (poly.size() < 3)
-      throw InputError(path, line,
-                       "face " + std::to_string(face) + " (0-based" + where() + ") has " +
-                           std::to_string(poly.size()) + " vertices; at least 3 are needed");
-    if (poly.size() > 3) {
-      polygons.push_back({tris.size(), polygon_vertices.size(), polygon_vertices.size() + poly.size()});
-      polygon_vertices.insert(polygon_vertices.end(), poly.begin(), poly.end());
-    }
-    for (std::size_t k = 1; k + 1 < poly.size(); ++k) {
-      tris.push_back(poly[0]);
-      tris.push_back(poly[k]);
-      tris.push_back(poly[k + 1]);
-    }
-    poly.clear();
-  }
-  template <class Where>
-  void index(std::int64_t v, std::uint64_t face, std::uint64_t line, Where where) {
-    if (v < 0 || std::uint64_t(v) >= num_vertices)
-      throw InputError(path, line,
-                       "face " + std::to_string(face) + " (0-based" + where() +
-                           "): vertex index " + std::to_string(v) + " is out of range (" +
-                           std::to_string(num_vertices) + " vertices)");
-    poly.push_back(std::uint32_t(v));
-  }
-};
-
 SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
   const PlyHeader h = parse_ply_header(path, data);
   const PlyElement* vert_el = nullptr;
@@ -560,14 +419,7 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
   if (mesh.tris.size() / 3 > 0xFFFFFFFFull) throw InputError(path, 0, "more than 2^32-1 triangles");
   sink.triangulate_polygons(raw);
 
-  // Weld and renumber.
-  const std::size_t nv = vert_el->count;
-  std::vector<std::uint32_t> remap(nv);
-  Welder weld(mesh.points, nv);
-  for (std::size_t i = 0; i < nv; ++i) remap[i] = weld.add(raw[3 * i], raw[3 * i + 1], raw[3 * i + 2]);
-  for (std::uint32_t& v : mesh.tris) v = remap[v];
-  // Points no facet uses (e.g. welded away or unreferenced in the file) are kept: the point
-  // ids are the welded file order; prepare_surface decides what unused points mean.
+  weld_file_vertices(raw, mesh);
   return mesh;
 }
 
@@ -637,7 +489,16 @@ SurfaceMesh read_surface(const std::string& path) {
                  [](unsigned char c) { return char(std::tolower(c)); });
   if (ext == ".stl") return read_stl(path);
   if (ext == ".ply") return read_ply(path);
-  throw InputError(path, 0, "unknown surface file extension " + quote_token_printable(ext) + " (supported: .stl, .ply)");
+  if (ext == ".obj") return read_obj(path);
+  if (ext == ".off") return read_off(path);
+  if (ext == ".om")  // the measurement is in this file's header comment
+    throw InputError(path, 0,
+                     "OpenMesh .om files are not read: the format stores OpenMesh's half-edge structure, "
+                     "not the file's raw faces, and OpenMesh 9.0's reader trusts its indices; "
+                     "export the surface as .obj, .off or .ply");
+  std::string supported;
+  for (std::string_view e : kSurfaceExtensions) supported += (supported.empty() ? "" : ", ") + std::string(e);
+  throw InputError(path, 0, "unknown surface file extension " + quote_token_printable(ext) + " (supported: " + supported + ")");
 }
 
 SurfaceMesh read_stl(const std::string& path) {

@@ -63,6 +63,34 @@ TEST(SmallDefects, NonConvexPlyPolygonsAreTriangulatedInTheirPlane) {
   EXPECT_NEAR(j["mesh_check"]["mesh_volume"].get<double>(), 3.0, 1e-9);
 }
 
+// Issue 20, part 5: OBJ and OFF inputs, end to end (quads, v/vt/vn references, negative
+// indices), meshed and checked; the help lists the formats.
+TEST(SmallDefects, ObjAndOffCubesMeshEndToEnd) {
+  const fs::path d = fresh("objoff");
+  std::ofstream(d / "cube.obj") << "# unit cube\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                                   "vt 0 0\nvn 0 0 -1\nf 1/1/1 4/1/1 3/1/1 2/1/1\nf 5//1 6//1 7//1 8//1\n"
+                                   "f 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf -5 -8 -4 -1\n";
+  std::ofstream(d / "cube.OFF") << "OFF\n8 6 12\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+                                   "4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n4 3 0 4 7\n";
+  std::string reference;
+  for (const char* name : {"cube.obj", "cube.OFF"}) {
+    const CliResult r = kdmesh("mesh " + (d / name).string() + " --size 0.3 --json -q");
+    ASSERT_EQ(r.code, 0) << name << ": " << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["status"], "ok") << name;
+    EXPECT_EQ(j["counts"]["surface_facets"], 12) << name;  // 6 quads, 2 triangles each
+    EXPECT_NEAR(j["mesh_check"]["mesh_volume"].get<double>(), 1.0, 1e-9) << name;
+    // The same quads give the same mesh, whichever format they came in.
+    const std::string counts = j["counts"].dump();
+    if (reference.empty())
+      reference = counts;
+    else
+      EXPECT_EQ(counts, reference) << name;
+  }
+  const CliResult help = kdmesh("mesh --help");
+  EXPECT_TRUE(contains(help.out, "Closed surface (.stl, .ply, .obj or .off)")) << help.out;
+}
+
 TEST(SmallDefects, AsciiStlWithUtf8BomIsRead) {
   const fs::path d = fresh("bom");
   kdmesh::SurfaceMesh m;

@@ -1,16 +1,19 @@
-// kdmesh — tests of the STL/PLY surface readers and writers (io/surface_io.h).
+// kdmesh — tests of the STL/PLY/OBJ/OFF surface readers and the STL/PLY writers (io/surface_io.h).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <gtest/gtest.h>
 
 #include <array>
 #include <bit>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/error.h"
@@ -73,6 +76,67 @@ std::string input_error(F f) {
   }
   ADD_FAILURE() << "expected InputError, nothing was thrown";
   return {};
+}
+
+/// `v` in shortest round-trip form: reading it back gives the same double.
+std::string exact(double v) {
+  char b[32];
+  return std::string(b, std::to_chars(b, b + sizeof b, v).ptr);
+}
+
+/// `m` as OBJ text (1-based indices). `polygons`: 0 = one 'f' line per facet; otherwise the
+/// facets are paired into quads (facets 2i and 2i+1 of unit_cube() share their diagonal).
+std::string obj_text(const SurfaceMesh& m, int polygons) {
+  std::string s = "# kdmesh test\no cube\n";
+  for (std::size_t i = 0; i < m.points.size(); ++i)
+    s += "v " + exact(m.points.p(std::uint32_t(i))[0]) + " " + exact(m.points.p(std::uint32_t(i))[1]) + " " +
+         exact(m.points.p(std::uint32_t(i))[2]) + "\n";
+  for (std::size_t f = 0; f < m.num_tris(); f += polygons ? 2 : 1) {
+    const std::uint32_t* t = m.tri(f);
+    s += "f " + std::to_string(t[0] + 1) + " " + std::to_string(t[1] + 1) + " " + std::to_string(t[2] + 1);
+    if (polygons) {  // appended piece by piece: `" " + to_string` trips GCC 12's false -Wrestrict
+      s += ' ';
+      s += std::to_string(m.tri(f + 1)[2] + 1);
+    }
+    s += "\n";
+  }
+  return s;
+}
+
+/// `m` as OFF text, one polygon per facet, or per quad as obj_text's.
+std::string off_text(const SurfaceMesh& m, int polygons = 0) {
+  std::string s = "OFF\n" + std::to_string(m.points.size()) + " " +
+                  std::to_string(polygons ? m.num_tris() / 2 : m.num_tris()) + " 0\n";
+  for (std::size_t i = 0; i < m.points.size(); ++i)
+    s += exact(m.points.p(std::uint32_t(i))[0]) + " " + exact(m.points.p(std::uint32_t(i))[1]) + " " +
+         exact(m.points.p(std::uint32_t(i))[2]) + "\n";
+  for (std::size_t f = 0; f < m.num_tris(); f += polygons ? 2 : 1) {
+    const std::uint32_t* t = m.tri(f);
+    s += polygons ? "4 " : "3 ";
+    s += std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]);
+    if (polygons) {
+      s += ' ';
+      s += std::to_string(m.tri(f + 1)[2]);
+    }
+    s += "\n";
+  }
+  return s;
+}
+
+/// `m` as ascii PLY text with quads as obj_text's (write_ply writes triangles only).
+std::string quad_ply_text(const SurfaceMesh& m) {
+  std::string s = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(m.points.size()) +
+                  "\nproperty double x\nproperty double y\nproperty double z\nelement face " +
+                  std::to_string(m.num_tris() / 2) + "\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string off = off_text(m, 1);
+  return s + off.substr(off.find('\n', off.find('\n') + 1) + 1);  // OFF's body is PLY's
+}
+
+/// Reads `text` as a surface file with extension `ext`.
+SurfaceMesh read_text(const std::string& text, const char* ext) {
+  const std::string path = scratch_path("io_surface", ext);
+  write_bytes(path, text);
+  return read_surface(path);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -210,6 +274,97 @@ TEST(SurfaceIo, WeldsBitIdenticalCoordinatesAndSignedZero) {
   EXPECT_FALSE(std::signbit(m.points.p(2)[0]));
 }
 
+// The same surface read from OBJ and OFF as from PLY: the same points (bit for bit, in the
+// same order) and the same facets. Coordinates 0.1 x are not floats: a reader that goes
+// through float (as OpenMesh 9's OBJ and OFF readers do) gives other points.
+TEST(SurfaceIoObjOff, CubeAsObjAndOffEqualsCubeAsPly) {
+  const SurfaceMesh cube = unit_cube(0.1);
+  const std::string ply = scratch_path("io_surface", ".ply");
+  write_ply(cube, ply, false);
+  const SurfaceMesh from_ply = read_surface(ply);
+  const std::pair<const char*, std::string> files[] = {
+      {".obj", obj_text(cube, 0)}, {".OBJ", obj_text(cube, 0)}, {".off", off_text(cube)}, {".Off", off_text(cube)}};
+  for (const auto& [ext, text] : files) {
+    const SurfaceMesh m = read_text(text, ext);
+    EXPECT_EQ(m.points.xyz, from_ply.points.xyz) << ext;
+    EXPECT_EQ(m.tris, from_ply.tris) << ext;
+    EXPECT_EQ(m.points.p(1)[0], 0.1) << ext;
+  }
+}
+
+// Quads are triangulated as PLY's are: a convex polygon gives its fan from its first vertex.
+TEST(SurfaceIoObjOff, QuadsAreFanTriangulatedAsInPly) {
+  const SurfaceMesh cube = unit_cube(0.1);
+  const SurfaceMesh from_ply = read_text(quad_ply_text(cube), ".ply");
+  const SurfaceMesh from_obj = read_text(obj_text(cube, 1), ".obj");
+  const SurfaceMesh from_off = read_text(off_text(cube, 1), ".off");
+  // The quad (a b c d) written for facets (a b c), (a c d) comes back as those two facets.
+  EXPECT_EQ(from_obj.tris, cube.tris);
+  EXPECT_EQ(from_off.tris, cube.tris);
+  EXPECT_EQ(from_ply.tris, cube.tris);
+  EXPECT_EQ(from_obj.points.xyz, from_ply.points.xyz);
+  EXPECT_EQ(from_off.points.xyz, from_ply.points.xyz);
+  // A pentagon (0,0) (2,0) (2,1) (1,2) (0,1): fan (0 1 2) (0 2 3) (0 3 4).
+  const SurfaceMesh penta = read_text("v 0 0 0\nv 2 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\nf 1 2 3 4 5\n", ".obj");
+  EXPECT_EQ(penta.tris, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 3, 0, 3, 4}));
+}
+
+// OBJ references v/vt/vn, v//vn and v/vt; negative indices count back from the last vertex
+// defined before the line; statements without facets (vt, vn, g, o, s, usemtl, mtllib, l) and
+// comments are skipped; CRLF line ends. The same tetrahedron as plain "f a b c" lines.
+TEST(SurfaceIoObjOff, ObjReferenceSyntaxNegativeIndicesCommentsAndCrlf) {
+  const std::string plain = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+  const std::string fancy =
+      "# a tetrahedron\r\nmtllib t.mtl\r\no tet\r\nv 0 0 0 # origin\r\nv 1 0 0\r\nv 0 1 0\r\n"
+      "vt 0 0\r\nvt 1 0\r\nvn 0 0 -1\r\ng bottom\r\nusemtl red\r\ns off\r\n"
+      "f -3/1/1 -1/2/1 -2/1/1\r\n"  // vertices 1 3 2 (the three defined so far)
+      "v 0 0 1 1.0\r\nl 1 4\r\n"   // a w coordinate; a polyline (no facet)
+      "f 1//1 2//1 -1//1\r\n"        // 1 2 4
+      "f 1/1 4/2 3/1\r\n"
+      "\r\n\tf\t2  3 4 \r\n";
+  const SurfaceMesh a = read_text(plain, ".obj");
+  const SurfaceMesh b = read_text(fancy, ".obj");
+  EXPECT_EQ(b.tris, (std::vector<std::uint32_t>{0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3}));
+  EXPECT_EQ(b.tris, a.tris);
+  EXPECT_EQ(b.points.xyz, a.points.xyz);
+  // A positive index may name a vertex defined later (as OpenMesh allows); a negative one not.
+  const SurfaceMesh later = read_text("f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n", ".obj");
+  EXPECT_EQ(later.tris, (std::vector<std::uint32_t>{0, 1, 2}));
+}
+
+// Degenerate and repeated faces reach the caller as the file has them (OpenMesh 9's OBJ
+// reader drops "f 1 2 2"); prepare_surface decides what they mean.
+TEST(SurfaceIoObjOff, DegenerateFacesAreKeptRaw) {
+  const SurfaceMesh obj = read_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 2\nf 1 2 3\nf 1 2 3\n", ".obj");
+  EXPECT_EQ(obj.tris, (std::vector<std::uint32_t>{0, 1, 1, 0, 1, 2, 0, 1, 2}));
+  const SurfaceMesh off = read_text("OFF\n3 3 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 1\n3 0 1 2\n3 0 1 2\n", ".off");
+  EXPECT_EQ(off.tris, obj.tris);
+}
+
+// OFF variants: counts on the keyword's line (also run together with it, as in ModelNet's
+// files), COFF/NOFF extra vertex values, face colours, comments and blank lines (a comment
+// before the counts broke OpenMesh 9's reader), CRLF, a byte order mark, "off" in lower case.
+TEST(SurfaceIoObjOff, OffVariants) {
+  const SurfaceMesh plain = read_text("OFF\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                      "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n", ".off");
+  ASSERT_EQ(plain.num_tris(), 4u);
+  const std::string variants[] = {
+      "OFF 4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
+      "OFF4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",  // as ModelNet's
+      "# made by hand\r\nOFF\r\n# counts next\r\n\r\n4 4 6\r\n0 0 0\r\n1 0 0\r\n0 1 0\r\n0 0 1\r\n"
+      "3 0 2 1\r\n3 0 1 3\r\n3 0 3 2\r\n3 1 2 3\r\n",
+      "COFF\n4 4 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n0 0 1 9 9 9 9\n"
+      "3 0 2 1 1 0 0\n3 0 1 3 0 1 0\n3 0 3 2\n3 1 2 3 0.5 0.5 0.5 1\n",
+      "NOFF\n4 4 0\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n0 0 1 0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
+      "\xEF\xBB\xBF" "off\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3",
+  };
+  for (const std::string& text : variants) {
+    const SurfaceMesh m = read_text(text, ".off");
+    EXPECT_EQ(m.tris, plain.tris) << text;
+    EXPECT_EQ(m.points.xyz, plain.points.xyz) << text;
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Hostile input
 // ---------------------------------------------------------------------------------------------
@@ -278,10 +433,16 @@ TEST(SurfaceIoHostile, GarbageAndEmptyFilesAndUnknownExtension) {
   write_bytes(empty, "");
   EXPECT_NE(input_error([&] { read_surface(empty); }).find("empty file"), std::string::npos);
 
-  const std::string obj = scratch_path("io_surface", ".obj");
-  write_bytes(obj, "v 0 0 0\n");
-  EXPECT_NE(input_error([&] { read_surface(obj); }).find("unknown surface file extension"),
-            std::string::npos);
+  const std::string dae = scratch_path("io_surface", ".dae");
+  write_bytes(dae, "v 0 0 0\n");
+  const std::string unknown = input_error([&] { read_surface(dae); });
+  EXPECT_NE(unknown.find("unknown surface file extension"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find(".stl, .ply, .obj, .off"), std::string::npos) << unknown;
+  // OpenMesh's own format is refused with the reason (surface_io.cpp's measurement), not read.
+  const std::string om = scratch_path("io_surface", ".OM");
+  write_bytes(om, "OMTB");
+  const std::string om_msg = input_error([&] { read_surface(om); });
+  EXPECT_NE(om_msg.find(om + ": OpenMesh .om files are not read"), std::string::npos) << om_msg;
 
   EXPECT_NE(input_error([&] { read_surface(scratch_path("io_surface", ".stl")); }).find("cannot open"),
             std::string::npos);
@@ -406,14 +567,81 @@ TEST(SurfaceIoHostile, TruncatedPlyAndMalformedAsciiStl) {
   EXPECT_NE(input_error([&] { read_stl(open); }).find("end of file"), std::string::npos);
 }
 
+// An OFF header count the file cannot hold is refused from the header line, before anything
+// is allocated from it (OpenMesh 9 reserved 4e9 faces and ran out of memory on this file).
+TEST(SurfaceIoHostile, LyingOffCountsFailFastWithoutAllocating) {
+  const std::string body = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+  for (const char* counts : {"4 4000000000 0", "400000000 4 0", "18446744073709551615 4 0", "4 40 0"}) {
+    const std::string path = scratch_path("io_surface", ".off");
+    write_bytes(path, "OFF\n" + std::string(counts) + "\n" + body);
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::string msg = input_error([&] { read_off(path); });
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
+    EXPECT_NE(msg.find(path + ":2: the header declares"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("only " + std::to_string(body.size()) + " bytes follow"), std::string::npos) << msg;
+  }
+  // A count that the bytes could hold but the lines do not: the missing record, by line.
+  const std::string path = scratch_path("io_surface", ".off");
+  write_bytes(path, "OFF\n4 5 0\n" + body + "                                  \n");
+  std::string msg = input_error([&] { read_off(path); });
+  EXPECT_NE(msg.find(path + ":11: unexpected end of file: face 4 (0-based) of the 5"), std::string::npos) << msg;
+  // Fewer faces declared than the file holds: the extra line is named, not dropped.
+  write_bytes(path, "OFF\n4 3 0\n" + body);
+  msg = input_error([&] { read_off(path); });
+  EXPECT_NE(msg.find(path + ":10: unexpected data after the last of the 3 faces"), std::string::npos) << msg;
+}
+
+TEST(SurfaceIoHostile, ObjAndOffIndexOutOfRangeNamesTheLine) {
+  const std::string obj = scratch_path("io_surface", ".obj");
+  const std::string verts = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n";
+  const struct {
+    std::string faces, want;
+  } obj_cases[] = {
+      {"f 1 3 2\nf 1 2 9\n", ":6: face 1 (0-based): vertex index 9 is out of range (the file has 4 vertices"},
+      {"f 1 3 2\n\nf 0 1 2\n", ":7: face 1 (0-based): vertex index 0 is out of range"},
+      {"f -5 -1 -2\n", ":5: face 0 (0-based): relative vertex index -5 is out of range (only 4 vertices"},
+      {"f 1 2 x\n", ":5: face 0 (0-based): vertex reference 'x' is not an index"},
+      {"f 1/1 2/2 /3\n", ":5: face 0 (0-based): vertex reference '/3' is not an index"},
+      {"f 1 2\n", ":5: face 0 (0-based) has 2 vertices; at least 3 are needed"},
+      {"v 1 2\nf 1 2 3\n", ":5: vertex 5 (1-based): coordinate z is missing"},
+      {"v 1 nan 2\nf 1 2 3\n", ":5: vertex 5 (1-based): non-finite coordinate y"},
+      {"vt 0 0\n", ": no faces ('f' lines): a point cloud"},
+  };
+  for (const auto& c : obj_cases) {
+    write_bytes(obj, verts + c.faces);
+    const std::string msg = input_error([&] { read_surface(obj); });
+    EXPECT_NE(msg.find(obj + c.want), std::string::npos) << msg;
+  }
+  const std::string off = scratch_path("io_surface", ".off");
+  const struct {
+    std::string text, want;
+  } off_cases[] = {
+      {"OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 3 2\n", ":7: face 1 (0-based): vertex index 3 is out of range (3 vertices)"},
+      {"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n", ":6: face 0 (0-based): vertex index -1 is out of range"},
+      {"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n", ":6: face 0 (0-based) declares 4 vertices, but the line holds 3"},
+      {"OFF\n3 1 0\n0 0 0\n1 0\n0 1 0\n3 0 1 2 # long enough for the counts\n", ":4: vertex 1 (0-based): coordinate z is missing"},
+      {"OFF BINARY\n3 1 0\n", ":1: binary OFF is not supported"},
+      {"4OFF\n3 1 0\n", ":1: '4OFF': 4OFF and nOFF"},
+      {"PLY\n3 1 0\n", ":1: not an OFF file"},
+      {"OFF\n3 x 0\n", ":2: OFF header: the face count 'x' is not a non-negative integer"},
+      {"OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", ":2: no faces: a point cloud"},
+  };
+  for (const auto& c : off_cases) {
+    write_bytes(off, c.text);
+    const std::string msg = input_error([&] { read_surface(off); });
+    EXPECT_NE(msg.find(off + c.want), std::string::npos) << msg;
+  }
+}
+
 TEST(SurfaceIoHostile, MutatedFilesGiveInputErrorOrAMeshNeverACrash) {
   // Valid files in every format, then random byte changes and truncations: each read must
   // either succeed with in-range facet ids or throw InputError (nothing else, no crash; the
   // sanitizer build checks memory safety).
   SurfaceMesh cube = unit_cube();
   std::vector<std::string> originals;
+  std::vector<const char*> extensions = {".stl", ".stl", ".ply", ".ply", ".ply", ".obj", ".off"};
   for (int fmt = 0; fmt < 4; ++fmt) {
-    const std::string path = scratch_path("io_surface", fmt < 2 ? ".stl" : ".ply");
+    const std::string path = scratch_path("io_surface", extensions[std::size_t(fmt)]);
     if (fmt < 2)
       write_stl(cube, path, fmt == 0);
     else
@@ -422,6 +650,8 @@ TEST(SurfaceIoHostile, MutatedFilesGiveInputErrorOrAMeshNeverACrash) {
     originals.emplace_back((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   }
   originals.push_back(binary_ply(true));
+  originals.push_back(obj_text(cube, 0) + "vt 0 0\nvn 0 0 1\nf -1/1/1 -2//1 -3\n");
+  originals.push_back(off_text(cube));
   std::uint64_t x = 88172645463325252ull;  // xorshift64
   auto rnd = [&] {
     x ^= x << 13;
@@ -431,7 +661,7 @@ TEST(SurfaceIoHostile, MutatedFilesGiveInputErrorOrAMeshNeverACrash) {
   };
   int ok = 0, errors = 0;
   for (std::size_t fmt = 0; fmt < originals.size(); ++fmt) {
-    const std::string path = scratch_path("io_surface", fmt < 2 ? ".stl" : ".ply");  // reused
+    const std::string path = scratch_path("io_surface", extensions[fmt]);  // reused
     for (int trial = 0; trial < 150; ++trial) {
       std::string bytes = originals[fmt];
       const int edits = 1 + int(rnd() % 4);
@@ -456,7 +686,7 @@ TEST(SurfaceIoHostile, MutatedFilesGiveInputErrorOrAMeshNeverACrash) {
     }
   }
   EXPECT_GT(errors, 0);  // the mutations do break files
-  EXPECT_EQ(ok + errors, int(5 * 150));
+  EXPECT_EQ(ok + errors, int(7 * 150));
 }
 
 TEST(SurfaceIo, WritersAreAtomicAndReportFailures) {

@@ -380,6 +380,20 @@ TEST(JobConfig, MissingInputIsResolvedAgainstTheBatchDirectory) {
   EXPECT_NO_THROW(kdmesh::load_batch_config(file.string()));
 }
 
+TEST(JobConfig, InputMayBeAnySurfaceFormatReadSurfaceReads) {
+  const fs::path file = write_batch(
+      "jobs:\n  - {name: a, size: 1, input: parts/a.obj}\n  - {name: b, size: 1, input: parts/b.OFF}\n"
+      "  - {name: c, size: 1, input: parts/c.Ply}\n  - {name: d, size: 1, input: parts/block.stl}\n");
+  for (const char* name : {"a.obj", "b.OFF", "c.Ply"}) std::ofstream(file.parent_path() / "parts" / name) << "\n";
+  const BatchConfig config = kdmesh::load_batch_config(file.string());
+  ASSERT_EQ(config.jobs.size(), 4u);
+  EXPECT_EQ(fs::path(config.jobs[0].input).filename(), "a.obj");
+  EXPECT_EQ(fs::path(config.jobs[1].input).filename(), "b.OFF");
+  const InputError e = load_error("jobs:\n  - name: a\n    size: 1\n    input: parts/block.dae\n");
+  EXPECT_EQ(e.line(), 4u);
+  EXPECT_TRUE(contains(e.what(), "'parts/block.dae' is not an .stl, .ply, .obj or .off file")) << e.what();
+}
+
 TEST(JobConfig, YamlSyntaxErrorHasLineAndColumn) {
   const InputError e = load_error(R"(jobs:
   - name: a

@@ -38,6 +38,8 @@ declare -A LIBS=(
 # The surface-reader and YAML-loader targets (listed when their harness file exists).
 [ -f tests/fuzz/fuzz_stl.cpp ] && SOURCES[stl]="$IO_SURFACE" && LIBS[stl]=""
 [ -f tests/fuzz/fuzz_ply_surface.cpp ] && SOURCES[ply_surface]="$IO_SURFACE" && LIBS[ply_surface]=""
+[ -f tests/fuzz/fuzz_obj.cpp ] && SOURCES[obj]="$IO_SURFACE" && LIBS[obj]=""
+[ -f tests/fuzz/fuzz_off.cpp ] && SOURCES[off]="$IO_SURFACE" && LIBS[off]=""
 # The solver-format readers (round trips of the writers).
 [ -f tests/fuzz/fuzz_msh.cpp ] && SOURCES[msh]="$IO_READERS" && LIBS[msh]=""
 [ -f tests/fuzz/fuzz_medit.cpp ] && SOURCES[medit]="$IO_READERS" && LIBS[medit]=""

@@ -37,7 +37,7 @@ int run_mesh(const Options& o) {
 void add_mesh_command(CLI::App& app, Runner& run) {
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
-      "mesh", "Tetrahedral mesh of a closed surface (.stl, .ply), checked as an FE domain");
+      "mesh", "Tetrahedral mesh of a closed surface (.stl, .ply, .obj, .off), checked as an FE domain");
   add_mesh_job_options(cmd, o->mesh);
   add_output_flags(cmd, o->out);
   cmd->callback([o, &run] { run = [o] { return run_mesh(*o); }; });

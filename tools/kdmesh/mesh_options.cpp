@@ -81,7 +81,7 @@ MeshJob make_mesh_job(const MeshCliOptions& o) {
 }
 
 void add_mesh_job_options(CLI::App* cmd, MeshCliOptions& o, const MeshCliSpec& spec) {
-  CLI::Option* input = cmd->add_option("input", o.input, "Closed surface (.stl or .ply)");
+  CLI::Option* input = cmd->add_option("input", o.input, "Closed surface (.stl, .ply, .obj or .off)");
   CLI::Option* size = cmd->add_option("--size", o.size, "Target edge length far from every zone (h_max)");
   if (spec.input_required) {
     input->required();

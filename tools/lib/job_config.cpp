@@ -18,6 +18,7 @@
 #include "core/error.h"
 #include "core/memory_amount.h"
 #include "io/file_io.h"
+#include "io/surface_io.h"
 #include "mesher/surface_repair.h"
 #include "tools/lib/job_paths.h"
 
@@ -355,14 +356,12 @@ class Loader {
     for (const char* req : {"input", "size"})
       if (!e.count(req)) fail(node, where + ": missing required key '" + std::string(req) + "'");
 
-    {  // input: relative to the batch file's directory; must exist, STL or PLY
+    {  // input: relative to the batch file's directory; must exist, a surface read_surface reads
       const YAML::Node v = e.at("input").value;
       const fs::path given = string(v, key("input"));
       const fs::path p = (given.is_absolute() ? given : base_ / given).lexically_normal();
-      std::string ext = p.extension().string();
-      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-      if (ext != ".stl" && ext != ".ply")
-        fail(v, key("input") + ": '" + given.string() + "' is not an .stl or .ply file");
+      if (!is_surface_extension(p.extension().string()))
+        fail(v, key("input") + ": '" + given.string() + "' is not an .stl, .ply, .obj or .off file");
       std::error_code ec;
       if (!fs::is_regular_file(p, ec))
         fail(v, key("input") + ": file '" + p.string() + "' not found" +

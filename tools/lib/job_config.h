@@ -14,7 +14,7 @@ namespace kdmesh {
 ///                  a value replaces the default's whole value, lists and mappings included)
 ///   jobs:          required, non-empty list of mappings:
 ///     name         required, unique, [A-Za-z0-9_.-]+
-///     input        required; .stl or .ply; relative to the YAML file's directory; must exist
+///     input        required; .stl, .ply, .obj or .off; relative to the YAML file's directory; must exist
 ///     scale        optional number > 0 (default 1)
 ///     size         required number > 0: h_max
 ///     min_size     optional number > 0, <= size (default size / 1000)
