@@ -40,7 +40,11 @@ PACKAGES=(
   libvtk9-dev
   libyaml-cpp-dev
   nlohmann-json3-dev
+  pybind11-dev
+  python3-dev
   python3-meshio
+  python3-numpy
+  python3-pytest
   python3-scipy
   tetgen
   time

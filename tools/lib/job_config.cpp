@@ -337,15 +337,19 @@ class Loader {
     return g;
   }
 
+  /// Options of one job given in memory (parse_job): `name` may be absent ("mesh"), and so may
+  /// `input` (the surface comes with them).
+  void set_in_memory() { in_memory_ = true; }
+
   MeshJob job(const YAML::Node& node, const std::map<std::string, Entry>& defaults,
               std::size_t index) const {
-    const std::string where0 = "jobs[" + std::to_string(index) + "]";
+    const std::string where0 = in_memory_ ? std::string("options") : "jobs[" + std::to_string(index) + "]";
     std::map<std::string, Entry> e = entries(node, kJobKeys, where0);
     for (const auto& [k, d] : defaults) e.emplace(k, d);  // job keys win
     MeshJob job;
     job.origin = file_ + ":" + std::to_string(line_of(node));
-    if (!e.count("name")) fail(node, where0 + ": missing required key 'name'");
-    job.name = string(e.at("name").value, where0 + ": key 'name'");
+    if (!e.count("name") && !in_memory_) fail(node, where0 + ": missing required key 'name'");
+    job.name = e.count("name") ? string(e.at("name").value, where0 + ": key 'name'") : std::string("mesh");
     if (!std::all_of(job.name.begin(), job.name.end(), [](char c) {
           return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-';
         }))
@@ -354,9 +358,10 @@ class Loader {
     const std::string where = "job '" + job.name + "'";
     auto key = [&](const std::string& k) { return where + ": key '" + k + "'"; };
     for (const char* req : {"input", "size"})
-      if (!e.count(req)) fail(node, where + ": missing required key '" + std::string(req) + "'");
+      if (!e.count(req) && !(in_memory_ && std::string(req) == "input"))
+        fail(node, where + ": missing required key '" + std::string(req) + "'");
 
-    {  // input: relative to the batch file's directory; must exist, a surface read_surface reads
+    if (e.count("input")) {  // input: relative to the batch file's directory; must exist, a surface read_surface reads
       const YAML::Node v = e.at("input").value;
       const fs::path given = string(v, key("input"));
       const fs::path p = (given.is_absolute() ? given : base_ / given).lexically_normal();
@@ -602,6 +607,7 @@ class Loader {
   fs::path base_, out_;
   bool allow_outside_ = false;
   double zone_limit_ = 0;  ///< most zones a job may have (0: no limit)
+  bool in_memory_ = false;
 };
 
 }  // namespace
@@ -685,6 +691,24 @@ BatchConfig load_batch_config(const std::string& path, const BatchLoadOptions& o
     return Loader(path, base, out, options.allow_outside_out_dir, limit > 0 ? limit / kBytesPerZone : 0).load(root);
   } catch (const YAML::Exception& e) {  // not expected: every access is checked first
     throw_input(path, e.mark.line >= 0 ? std::uint64_t(e.mark.line) + 1 : 0, e.msg);
+  }
+}
+
+MeshJob parse_job(const std::string& text, const std::string& label) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw_input(label, e.mark.line >= 0 ? std::uint64_t(e.mark.line) + 1 : 0, "syntax error: " + e.msg);
+  }
+  if (!root.IsMap()) throw_input(label, 0, "options: expected a mapping of job keys");
+  const fs::path here = fs::current_path();
+  Loader loader(label, here, here, /*allow_outside=*/true, /*zone_limit=*/0);
+  loader.set_in_memory();
+  try {
+    return loader.job(root, {}, 0);
+  } catch (const YAML::Exception& e) {  // not expected: every access is checked first
+    throw_input(label, e.mark.line >= 0 ? std::uint64_t(e.mark.line) + 1 : 0, e.msg);
   }
 }
 

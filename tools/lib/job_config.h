@@ -100,6 +100,12 @@ BatchConfig load_batch_config(const std::string& path, const BatchLoadOptions& o
 /// The same, with `out_dir` as options.out_dir and the other options' defaults.
 BatchConfig load_batch_config(const std::string& path, const std::string& out_dir = "");
 
+/// One job's options as a mapping of the job keys above (the same schema and checks; JSON is
+/// YAML), for callers that hold the surface in memory (the Python module's keyword
+/// arguments): `name` defaults to "mesh", `input` may be absent, relative paths are resolved
+/// against the current directory and outputs may lie anywhere. InputError naming `label`.
+MeshJob parse_job(const std::string& text, const std::string& label);
+
 /// Levenshtein distance, and the candidate closest to `word` (for "did you mean" hints; ""
 /// when none is reasonably close).
 std::size_t edit_distance(const std::string& a, const std::string& b);

@@ -9,6 +9,7 @@
 #include <iomanip>
 #include <sstream>
 #include <memory>
+#include <exception>
 #include <new>
 #include <vector>
 
@@ -268,12 +269,14 @@ nlohmann::json counts_json(const MeshReport& r) {
 /// Reads the surface, runs the front door, checks the nodes' Delaunay tetrahedralization when
 /// asked, and writes the outputs; fills `j` as it goes, so a failure still reports what was
 /// measured. Throws.
-void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json& j) {
+MeshResult run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json& j,
+                        const SurfaceMesh* in_memory) {
   auto log = [&](const std::string& s) {
     if (cb.log) cb.log(s);
   };
   MeshParams params = job;
-  params.fe_groups = !job.msh.empty() || !job.inp.empty() || !job.medit.empty() || !job.boundary_vtu.empty();
+  params.fe_groups = job.fe_groups || !job.msh.empty() || !job.inp.empty() || !job.medit.empty() ||
+                     !job.boundary_vtu.empty();
   if (!(params.scale > 0)) throw UsageError("job '" + job.name + "': scale must be > 0");
   if (!(params.sizing.max_size > 0)) throw UsageError("job '" + job.name + "': size must be > 0");
   check_option_ranges(params);  // before any work: numbers in the range the pipeline computes in
@@ -281,8 +284,13 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
   Stopwatch total, clock;
   j["notices"] = nlohmann::json::array();
 
-  log("reading " + job.input);
-  SurfaceMesh raw = read_surface(job.input);
+  SurfaceMesh raw;
+  if (in_memory) {
+    raw = *in_memory;
+  } else {
+    log("reading " + job.input);
+    raw = read_surface(job.input);
+  }
   const double read_seconds = clock.seconds();
   MeshReport report;
   MeshResult result;
@@ -353,6 +361,7 @@ void run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann::json
   sec["total"] = total.seconds();
   output(job.summary, "summary", [&](const std::string& t) { write_text(t, j.dump(2) + "\n", job.summary); });
   files.commit();
+  return result;
 }
 
 }  // namespace
@@ -423,46 +432,59 @@ void add_report_json(const MeshReport& r, const FeMesh* fe, nlohmann::json& j) {
   }
 }
 
+MeshResult run_job(const MeshJob& job, const MeshJobCallbacks& callbacks, nlohmann::json& summary,
+                   const SurfaceMesh* surface) {
+  summary = {{"job", job.name}, {"input", job.input}, {"status", "running"}};
+  if (!job.origin.empty()) summary["defined_at"] = job.origin;
+  summary["options"] = {{"scale", job.scale},
+                        {"size", job.sizing.max_size},
+                        {"min_size", job.sizing.min_size},
+                        {"gradation", job.sizing.gradation},
+                        {"zones", job.sizing.zones.size()},
+                        {"sharp_angle", job.sharp_angle},
+                        {"order", std::string(order_kind_name(job.order.kind))},
+                        {"seed", job.seed},
+                        {"check_tetgen", job.check_tetgen},
+                        {"check_delaunay", job.check_delaunay}};
+  return run_pipeline(job, callbacks, summary, surface);
+}
+
+ExitCode record_failure(nlohmann::json& summary, std::exception_ptr error, double seconds) {
+  ExitCode code = ExitCode::failure;
+  nlohmann::json e;
+  try {
+    std::rethrow_exception(error);
+  } catch (const Error& err) {
+    code = err.code();
+    e = {{"type", dynamic_cast<const SurfaceError*>(&err) ? "surface" : error_type_name(err.code())},
+         {"exit_code", int(err.code())},
+         {"message", err.what()}};
+  } catch (const std::bad_alloc&) {
+    e = {{"type", "internal"}, {"exit_code", 1}, {"message", "out of memory"}};
+  } catch (const std::exception& err) {
+    e = {{"type", "internal"}, {"exit_code", 1}, {"message", std::string("internal error: ") + err.what()}};
+  } catch (...) {
+    e = {{"type", "internal"}, {"exit_code", 1}, {"message", "unknown internal error"}};
+  }
+  // Failed: the summary says so; no output exists (AtomicFile removed every temporary).
+  try {
+    summary["error"] = std::move(e);
+    summary["status"] = "failed";
+    summary.erase("outputs");
+    summary["seconds"]["total"] = seconds;
+  } catch (...) {
+  }
+  return code;
+}
+
 MeshJobResult run_mesh_job(const MeshJob& job, const MeshJobCallbacks& callbacks) {
   MeshJobResult r;
   Stopwatch total;
   try {
-    r.summary = {{"job", job.name}, {"input", job.input}, {"status", "running"}};
-    if (!job.origin.empty()) r.summary["defined_at"] = job.origin;
-    r.summary["options"] = {{"scale", job.scale},
-                            {"size", job.sizing.max_size},
-                            {"min_size", job.sizing.min_size},
-                            {"gradation", job.sizing.gradation},
-                            {"zones", job.sizing.zones.size()},
-                            {"sharp_angle", job.sharp_angle},
-                            {"order", std::string(order_kind_name(job.order.kind))},
-                            {"seed", job.seed},
-                            {"check_tetgen", job.check_tetgen},
-                            {"check_delaunay", job.check_delaunay}};
-    run_pipeline(job, callbacks, r.summary);
+    run_job(job, callbacks, r.summary);
     return r;
-  } catch (const Error& e) {
-    r.code = e.code();
-    r.summary["error"] = {{"type", dynamic_cast<const SurfaceError*>(&e) ? "surface" : error_type_name(e.code())},
-                          {"exit_code", int(e.code())},
-                          {"message", e.what()}};
-  } catch (const std::bad_alloc&) {
-    r.code = ExitCode::failure;
-    r.summary["error"] = {{"type", "internal"}, {"exit_code", 1}, {"message", "out of memory"}};
-  } catch (const std::exception& e) {
-    r.code = ExitCode::failure;
-    r.summary["error"] = {{"type", "internal"}, {"exit_code", 1},
-                          {"message", std::string("internal error: ") + e.what()}};
   } catch (...) {
-    r.code = ExitCode::failure;
-    r.summary["error"] = {{"type", "internal"}, {"exit_code", 1}, {"message", "unknown internal error"}};
-  }
-  // Failed: the summary says so; no output exists (AtomicFile removed every temporary).
-  try {
-    r.summary["status"] = "failed";
-    r.summary.erase("outputs");
-    r.summary["seconds"]["total"] = total.seconds();
-  } catch (...) {
+    r.code = record_failure(r.summary, std::current_exception(), total.seconds());
   }
   return r;
 }

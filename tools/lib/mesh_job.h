@@ -2,6 +2,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <string>
 #include <vector>
@@ -71,6 +72,17 @@ struct MeshJobResult {
 /// output at all: every output is first written to a temporary file, and all are renamed into
 /// place only once every one of them has been written.
 MeshJobResult run_mesh_job(const MeshJob& job, const MeshJobCallbacks& callbacks = {});
+
+/// What run_mesh_job runs, throwing instead (the typed kdmesh::Error of the failure), and
+/// returning the mesh: `summary` is filled as the job goes (so a failure still has what was
+/// measured; record_failure then marks it). With `surface` given, the job meshes it instead
+/// of reading job.input (which then only names it in messages).
+MeshResult run_job(const MeshJob& job, const MeshJobCallbacks& callbacks, nlohmann::json& summary,
+                   const SurfaceMesh* surface = nullptr);
+
+/// Marks `summary` failed by `error` (status, error {type, exit_code, message}, no outputs,
+/// seconds.total); returns the error's exit code.
+ExitCode record_failure(nlohmann::json& summary, std::exception_ptr error, double seconds);
 
 /// The summary's figures of a report (counts, estimate, repairs, automatic_sizing, thickness,
 /// improve, mesh_check, quality, size_fidelity, boundary, groups (with `fe`), quadratic,
