@@ -453,3 +453,30 @@ TEST(JobConfig, BrokenStreamAfterTheDocumentEndsWithAnError) {
   EXPECT_TRUE(contains(e.what(), "second YAML document")) << e.what();
 }
 }  // namespace
+
+// The Python module's keyword arguments go through parse_job: the job keys of a batch file,
+// with the same checks, but `name` and `input` optional (the surface may come as arrays).
+TEST(JobConfig, ParseJobTakesTheBatchKeysWithoutNameOrInput) {
+  const kdmesh::MeshJob j = kdmesh::parse_job(
+      R"({"size": 2.5, "gradation": 0.2, "zones": [{"type": "point", "at": [1, 2, 3], "size": 0.5}],
+          "tolerance": {"hausdorff": 0.05}, "order": "kd-bfs", "patch_groups": true})",
+      "kwargs");
+  EXPECT_EQ(j.name, "mesh");
+  EXPECT_TRUE(j.input.empty());
+  EXPECT_EQ(j.sizing.max_size, 2.5);
+  EXPECT_EQ(j.sizing.min_size, 2.5 / 1000);
+  EXPECT_EQ(j.sizing.gradation, 0.2);
+  ASSERT_EQ(j.sizing.zones.size(), 1u);
+  EXPECT_EQ(j.sizing.zones[0].size, 0.5);
+  EXPECT_EQ(j.check.hausdorff_tolerance, 0.05);
+  EXPECT_TRUE(j.group_options.patch_groups);
+  try {
+    kdmesh::parse_job(R"({"size": 1, "gradaton": 0.2})", "kwargs");
+    FAIL() << "an unknown key was accepted";
+  } catch (const kdmesh::InputError& e) {
+    EXPECT_EQ(e.file(), "kwargs");
+    EXPECT_NE(std::string(e.what()).find("did you mean 'gradation'"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(kdmesh::parse_job(R"({"gradation": 0.2})", "kwargs"), kdmesh::InputError);  // no size
+  EXPECT_THROW(kdmesh::parse_job(R"([1, 2])", "kwargs"), kdmesh::InputError);             // no mapping
+}

@@ -372,6 +372,8 @@ class Loader {
         fail(v, key("input") + ": file '" + p.string() + "' not found" +
                     (given.is_absolute() ? "" : " (relative paths are resolved against the batch file's directory)"));
       job.input = p.string();
+    } else {
+      job.input.clear();  // given in memory: the caller names it
     }
     if (e.count("scale")) job.scale = positive(e.at("scale").value, key("scale"));
     job.sizing.max_size = positive(e.at("size").value, key("size"));
