@@ -184,19 +184,30 @@ TEST(CliCompareTetgen, UsageErrors) {  // exit 2 and one line with or without Te
   }
 }
 
-// Built without TetGen (KDMESH_WITH_TETGEN=OFF), every TetGen feature asked for by name is a
-// usage error (exit 2) that says so, before any meshing; `delaunay --check` skips TetGen.
-TEST(CliCompareTetgen, WithoutTetgenTetgenFeaturesAreClearUsageErrors) {
+// Built without TetGen (KDMESH_WITH_TETGEN=OFF), every TetGen feature asked for by name is
+// refused, saying so, before any meshing: a usage error (exit 2), or in a batch file a config
+// error at its line (exit 3). `delaunay --check` skips TetGen and still passes.
+TEST(CliCompareTetgen, WithoutTetgenTetgenFeaturesAreRefusedClearly) {
   if (kdmesh::tetgen_available()) GTEST_SKIP() << "this kdmesh has TetGen";
   const std::string yaml = (tmpdir() / "check-tetgen.yaml").string();
   std::ofstream(yaml) << "jobs:\n  - {name: one, input: " << kBlock << ", size: 6, check: [tetgen]}\n";
-  for (const std::string& args : std::vector<std::string>{"compare-tetgen " + kBlock + " --size 6",
-                                  "mesh " + kBlock + " --size 6 --check tetgen",
-                                  "batch " + yaml, std::string("bench --kernels tetgen")}) {
+  const std::string says = "built without TetGen (KDMESH_WITH_TETGEN=OFF)";
+  for (const auto& [args, code] : std::vector<std::pair<std::string, int>>{
+           {"compare-tetgen " + kBlock + " --size 6", 2},
+           {"mesh " + kBlock + " --size 6 --check tetgen", 2},
+           {"bench --kernels tetgen", 2},
+           {"batch " + yaml, 3}}) {
     const CliResult r = kdmesh(args + " -q");
-    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
-    EXPECT_NE(r.err.find("built without TetGen (KDMESH_WITH_TETGEN=OFF)"), std::string::npos) << args << "\n" << r.err;
+    EXPECT_EQ(r.code, code) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(says), std::string::npos) << args << "\n" << r.err;
   }
+  const fs::path pts = tmpdir() / "no-tetgen.xyz";
+  ASSERT_EQ(kdmesh("points --dist axes -n 500 --seed 2 -q -o " + pts.string()).code, 0);
+  const CliResult r = kdmesh("delaunay " + pts.string() + " --check --json -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["check"]["pass"].get<bool>());
+  EXPECT_NE(j["check"]["tetgen"]["skipped"].get<std::string>().find(says), std::string::npos);
 }
 
 TEST(TetgenCompare, SwitchStrings) {
