@@ -43,6 +43,14 @@ struct CgalOptions {
 /// TetGen's internal tolerance (relative thickness below ~1e-7 of the bounding-box diagonal).
 ReferenceResult tetgen_delaunay(const PointSet& points);
 
+/// Whether this kdmesh was built with TetGen (the CMake option KDMESH_WITH_TETGEN). Without
+/// it, tetgen_delaunay throws UsageError with without_tetgen_message; the mesher never needs it.
+bool tetgen_available();
+
+/// "<what> needs TetGen, but this kdmesh was built without TetGen (KDMESH_WITH_TETGEN=OFF)":
+/// the one message for every TetGen feature asked of a build without it.
+std::string without_tetgen_message(const std::string& what);
+
 /// The meaning of a TetGen 1.5 library error code (the int its terminatetetgen throws), for
 /// messages: "out of memory", "self-intersection detected", ..., "error code <n>" if unknown.
 std::string tetgen_error_text(int code);

@@ -16,20 +16,24 @@
 //    Its initial simplex search uses a relative tolerance (epsilon = 1e-8, see -T).
 //    So inputs that TetGen would reject must be rejected *before* calling it: see
 //    check_tetgen_can_handle().
+#include <string>
+
+#include "core/error.h"
+#include "mesher/reference_delaunay.h"
+
+// Without TetGen (KDMESH_WITH_TETGEN=OFF) only the stubs at the end are built.
+#ifdef KDMESH_WITH_TETGEN
 #include <algorithm>
 #include <climits>
 #include <cmath>
 #include <cstring>
-#include <string>
 #include <vector>
 
 #include <tetgen.h>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
-#include "core/error.h"
 #include "core/timer.h"
-#include "mesher/reference_delaunay.h"
 #include "mesher/tet_compare.h"
 
 namespace kdmesh {
@@ -222,6 +226,30 @@ ReferenceResult tetgen_delaunay(const PointSet& original) {
   }
   result.num_vertices = std::size_t(std::count(used.begin(), used.end(), true));
   return result;
+}
+
+bool tetgen_available() { return true; }
+
+}  // namespace kdmesh
+
+#else  // without TetGen
+
+namespace kdmesh {
+
+bool tetgen_available() { return false; }
+
+ReferenceResult tetgen_delaunay(const PointSet&) {
+  throw UsageError(without_tetgen_message("the TetGen reference tetrahedralization"));
+}
+
+}  // namespace kdmesh
+
+#endif  // KDMESH_WITH_TETGEN
+
+namespace kdmesh {
+
+std::string without_tetgen_message(const std::string& what) {
+  return what + " needs TetGen, but this kdmesh was built without TetGen (KDMESH_WITH_TETGEN=OFF)";
 }
 
 std::string tetgen_error_text(int code) {

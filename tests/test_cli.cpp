@@ -13,6 +13,7 @@
 #include <string>
 
 #include "tests/support/run_cli.h"
+#include "tests/support/tetgen.h"
 
 namespace {
 
@@ -58,6 +59,7 @@ TEST(Cli, PointsAreDeterministicForASeed) {
 }
 
 TEST(Cli, DelaunayCheckJsonAndVtu) {
+  KDMESH_REQUIRE_TETGEN();
   const fs::path pts = tmpdir() / "axes.xyz", vtu = tmpdir() / "axes.vtu";
   ASSERT_EQ(kdmesh("points --dist axes -n 3000 --seed 2 -q -o " + pts.string()).code, 0);
   fs::remove(vtu);

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "tests/support/run_cli.h"
+#include "tests/support/tetgen.h"
 #include <vector>
 
 namespace {
@@ -64,6 +65,7 @@ double positive(const std::map<std::string, std::string>& row, const std::string
 }
 
 TEST(CliBench, SmokeRunAllKernels) {
+  KDMESH_REQUIRE_TETGEN();
   const fs::path out = tmpdir() / "smoke";
   const CliResult r = kdmesh("bench --dists cube,axes --sizes 2000 --orders kd-bfs,kd-bfs-hilbert,hilbert,cgal --out " +
                              out.string() + " --json");

@@ -17,6 +17,7 @@
 #include "sizing/sizing_field.h"
 #include "tests/support/run_cli.h"
 #include "tools/lib/tetgen_compare.h"
+#include "tests/support/tetgen.h"
 
 namespace {
 
@@ -81,6 +82,7 @@ void expect_sound_side(const nlohmann::json& side, double volume, const std::str
 }
 
 TEST(CliCompareTetgen, BlockBothSidesMeasuredTheSameWay) {
+  KDMESH_REQUIRE_TETGEN();
   const CliResult r = kdmesh("compare-tetgen " + kBlock + " --size 20 --json -q");
   ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);  // stdout is one JSON document
@@ -103,6 +105,7 @@ TEST(CliCompareTetgen, BlockBothSidesMeasuredTheSameWay) {
 }
 
 TEST(CliCompareTetgen, VoidIsAHoleForTetgenAndKeepWritesBothMeshes) {
+  KDMESH_REQUIRE_TETGEN();
   kdmesh::SurfaceMesh m;
   add_cube(m, 0, 10);
   add_cube(m, 3, 7, false);  // a void: its facets face into it
@@ -122,6 +125,7 @@ TEST(CliCompareTetgen, VoidIsAHoleForTetgenAndKeepWritesBothMeshes) {
 }
 
 TEST(CliCompareTetgen, PlainTextTables) {
+  KDMESH_REQUIRE_TETGEN();
   const CliResult r = kdmesh("compare-tetgen " + kBlock + " --size 25 -q --tetgen-switches pq1.414/12");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.err, "");  // --quiet: nothing on stderr
@@ -131,6 +135,7 @@ TEST(CliCompareTetgen, PlainTextTables) {
 }
 
 TEST(CliCompareTetgen, OpenSurfaceFailsWithOneMessage) {
+  KDMESH_REQUIRE_TETGEN();
   kdmesh::SurfaceMesh m;
   add_cube(m, 0, 10);
   m.tris.resize(m.tris.size() - 3);  // a hole in the surface
@@ -149,6 +154,7 @@ TEST(CliCompareTetgen, OpenSurfaceFailsWithOneMessage) {
 }
 
 TEST(CliCompareTetgen, TetgenStoppedIsTetgensFailureNotACrash) {
+  KDMESH_REQUIRE_TETGEN();
   // 1 ms cannot fit TetGen's fork and its ~10^4-tet mesh: it is killed, kdmesh reports it.
   const CliResult r = kdmesh("compare-tetgen " + kBlock + " --size 8 --tetgen-timeout 0.001 --json -q");
   EXPECT_EQ(r.code, 1) << r.err;
@@ -160,7 +166,7 @@ TEST(CliCompareTetgen, TetgenStoppedIsTetgensFailureNotACrash) {
   EXPECT_NE(r.err.find("kdmesh: error: TetGen did not finish"), std::string::npos) << r.err;
 }
 
-TEST(CliCompareTetgen, UsageErrors) {
+TEST(CliCompareTetgen, UsageErrors) {  // exit 2 and one line with or without TetGen
   const std::string config = std::string(KDMESH_SOURCE_DIR) + "/models/block/block.yaml";
   for (const std::string& args : std::vector<std::string>{
            "compare-tetgen -q",                                                    // no surface, no --config
@@ -176,6 +182,32 @@ TEST(CliCompareTetgen, UsageErrors) {
     EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
     EXPECT_EQ(count_lines(r.err), 1u) << args << "\n" << r.err;
   }
+}
+
+// Built without TetGen (KDMESH_WITH_TETGEN=OFF), every TetGen feature asked for by name is
+// refused, saying so, before any meshing: a usage error (exit 2), or in a batch file a config
+// error at its line (exit 3). `delaunay --check` skips TetGen and still passes.
+TEST(CliCompareTetgen, WithoutTetgenTetgenFeaturesAreRefusedClearly) {
+  if (kdmesh::tetgen_available()) GTEST_SKIP() << "this kdmesh has TetGen";
+  const std::string yaml = (tmpdir() / "check-tetgen.yaml").string();
+  std::ofstream(yaml) << "jobs:\n  - {name: one, input: " << kBlock << ", size: 6, check: [tetgen]}\n";
+  const std::string says = "built without TetGen (KDMESH_WITH_TETGEN=OFF)";
+  for (const auto& [args, code] : std::vector<std::pair<std::string, int>>{
+           {"compare-tetgen " + kBlock + " --size 6", 2},
+           {"mesh " + kBlock + " --size 6 --check tetgen", 2},
+           {"bench --kernels tetgen", 2},
+           {"batch " + yaml, 3}}) {
+    const CliResult r = kdmesh(args + " -q");
+    EXPECT_EQ(r.code, code) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(says), std::string::npos) << args << "\n" << r.err;
+  }
+  const fs::path pts = tmpdir() / "no-tetgen.xyz";
+  ASSERT_EQ(kdmesh("points --dist axes -n 500 --seed 2 -q -o " + pts.string()).code, 0);
+  const CliResult r = kdmesh("delaunay " + pts.string() + " --check --json -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["check"]["pass"].get<bool>());
+  EXPECT_NE(j["check"]["tetgen"]["skipped"].get<std::string>().find(says), std::string::npos);
 }
 
 TEST(TetgenCompare, SwitchStrings) {

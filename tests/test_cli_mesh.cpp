@@ -17,6 +17,7 @@
 #include "io/surface_io.h"
 #include "tests/support/run_cli.h"
 #include "tools/lib/mesh_job.h"
+#include "tests/support/tetgen.h"
 
 namespace {
 
@@ -150,6 +151,7 @@ TEST(CliMesh, SolverFormatsCarryTheBoundaryGroups) {
 }
 
 TEST(CliMesh, DelaunayChecksOfTheNodes) {
+  KDMESH_REQUIRE_TETGEN();
   const fs::path stl = write_cube("cube4.stl", 4);
   const CliResult r = kdmesh("mesh " + stl.string() + " --size 1.5 --check tetgen,delaunay --json -q");
   ASSERT_EQ(r.code, 0) << r.err;
@@ -444,6 +446,7 @@ TEST(CliBatch, ConfigErrorsStopBeforeAnyJobRuns) {
 }
 
 TEST(CliBatch, AllSucceedingExitsZero) {
+  KDMESH_REQUIRE_TETGEN();
   write_cube("ok-cube.stl", 3);
   const fs::path yaml = tmpdir() / "ok.yaml";
   // Both jobs run TetGen at the same time (-j 2): TetGen's global state must not be shared.

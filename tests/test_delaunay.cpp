@@ -16,6 +16,7 @@
 #include "mesher/tet_compare.h"
 #include "tests/support/walk_histogram.h"
 #include "tools/lib/distributions.h"
+#include "tests/support/tetgen.h"
 
 namespace kdmesh {
 namespace {
@@ -68,6 +69,7 @@ TEST(Delaunay, ValidOnAllDistributionsAndOrders) {
 }
 
 TEST(Delaunay, MatchesTetGenAndCgalInGeneralPosition) {
+  KDMESH_REQUIRE_TETGEN();
   for (Distribution d : {Distribution::cube, Distribution::axes, Distribution::disk}) {
     const PointSet pts = generate_points(d, 5000, 3);
     const auto ours = canonical_tets(pts, run(pts).tri);
@@ -82,6 +84,7 @@ TEST(Delaunay, MatchesTetGenAndCgalInGeneralPosition) {
 // perturbation is lexicographic, as in CGAL, so the result is the same for every insertion
 // order and is CGAL's tet set; TetGen breaks ties its own way, so only invariants are compared.
 TEST(Delaunay, IntegerLatticeIsValidOrderIndependentAndMatchesCgal) {
+  KDMESH_REQUIRE_TETGEN();
   const PointSet pts = lattice(10);
   const auto kd = run(pts, OrderKind::kd_bfs);
   expect_valid(pts, kd, "lattice kd-bfs");
@@ -186,6 +189,7 @@ TEST(Delaunay, DuplicatesAreReportedAndSkipped) {
 // Points 1e-15 apart are distinct points, not duplicates: they must all become vertices, and
 // the result must still be the unique Delaunay tetrahedralization that TetGen and CGAL find.
 TEST(Delaunay, NearDuplicatesAreDistinctVertices) {
+  KDMESH_REQUIRE_TETGEN();
   PointSet pts = generate_points(Distribution::cube, 500, 8);
   for (std::uint32_t i = 0; i < 50; ++i) pts.push_back(pts.p(i)[0] + 1e-15, pts.p(i)[1], pts.p(i)[2]);
   const auto r = run(pts);
@@ -242,6 +246,7 @@ TEST(Delaunay, ExtremeScales) {
 // Regression: TetGen crashed (SIGSEGV in its cleanup) on points scaled by 1e-200, and the
 // volume check overflowed to inf at 1e+200. Scaling by a power of two changes no tet.
 TEST(Delaunay, RegressionTetgenAndVolumeAtScale1e200) {
+  KDMESH_REQUIRE_TETGEN();
   const PointSet base = generate_points(Distribution::cube, 2000, 3);
   const auto reference = canonical_tets(base, run(base).tri);
   for (int e : {-664, 664}) {  // 2^+-664 ~ 1e+-200

@@ -21,6 +21,7 @@
 #include "tests/support/run_cli.h"
 #include "tools/lib/mesh_job.h"
 #include "mesher/numeric_ranges.h"
+#include "mesher/reference_delaunay.h"
 
 namespace {
 
@@ -121,6 +122,8 @@ TEST(ExtremeNumbers, ReproducersGiveClearErrorsNotTraps) {
       {"mesh " + kBlock + " --size 1e-300", 2, "size (--size) 1e-300"},
   };
   for (const Case& c : cases) {
+    // without TetGen, compare-tetgen refuses first, for that reason (test_cli_compare_tetgen)
+    if (!kdmesh::tetgen_available() && c.args.starts_with("compare-tetgen")) continue;
     const auto t0 = std::chrono::steady_clock::now();
     const CliResult r = kdmesh(c.args + " -q");
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

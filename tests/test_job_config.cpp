@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "tests/support/scratch.h"
 #include "tools/lib/job_config.h"
+#include "tests/support/tetgen.h"
 
 namespace {
 
@@ -45,6 +46,7 @@ InputError load_error(const std::string& yaml) {
 bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
 TEST(JobConfig, EveryZoneTypeMapsToSizingOptions) {
+  KDMESH_REQUIRE_TETGEN();
   // Line numbers are not checked here; values are the ones written below.
   const fs::path file = write_batch(R"(# kdmesh batch file
 defaults:

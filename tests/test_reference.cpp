@@ -17,6 +17,7 @@
 #include "core/rng.h"
 #include "mesher/reference_delaunay.h"
 #include "mesher/tet_compare.h"
+#include "tests/support/tetgen.h"
 
 namespace kdmesh {
 namespace {
@@ -239,6 +240,7 @@ TEST(TetCompare, TotalVolumeOfUnitTet) {
 // Reference tetrahedralizations
 
 TEST(Reference, OrientationConvention) {
+  KDMESH_REQUIRE_TETGEN();
   // (0, e1, e2, e3) is positive in kdmesh's convention; both adapters must return it so.
   PointSet ps;
   ps.push_back(0, 0, 0);
@@ -257,6 +259,7 @@ TEST(Reference, OrientationConvention) {
 class GeneralPosition : public ::testing::TestWithParam<std::size_t> {};
 
 TEST_P(GeneralPosition, TetgenAndCgalAgree) {
+  KDMESH_REQUIRE_TETGEN();
   const std::size_t n = GetParam();
   const PointSet ps = random_points(n, 1000 + n);
   const ReferenceResult tg = tetgen_delaunay(ps);
@@ -284,6 +287,7 @@ TEST_P(GeneralPosition, TetgenAndCgalAgree) {
 INSTANTIATE_TEST_SUITE_P(Sizes, GeneralPosition, ::testing::Values(5, 100, 2000));
 
 TEST(Reference, CubeCornersAndCentreAreCospherical) {
+  KDMESH_REQUIRE_TETGEN();
   // The centre and the 4 corners of any face are cospherical: each face's diagonal is an
   // arbitrary choice, so only the count (2 tets per face) and the volume are determined.
   PointSet ps;
@@ -304,6 +308,7 @@ TEST(Reference, CubeCornersAndCentreAreCospherical) {
 }
 
 TEST(Reference, LatticeVolumes) {
+  KDMESH_REQUIRE_TETGEN();
   // A 4x4x4 lattice: massively cospherical, the tet counts may legitimately differ.
   PointSet ps;
   for (int i = 0; i < 64; ++i) ps.push_back(i % 4, (i / 4) % 4, i / 16);
@@ -319,6 +324,7 @@ TEST(Reference, LatticeVolumes) {
 }
 
 TEST(Reference, ExactDuplicatesAreMerged) {
+  KDMESH_REQUIRE_TETGEN();
   const std::size_t m = 300;
   const PointSet base = random_points(m, 77);
   // Every base point once, some twice or three times, in a shuffled order, so that copies
@@ -360,6 +366,7 @@ TEST(Reference, ExactDuplicatesAreMerged) {
 }
 
 TEST(Reference, NearDuplicatesStayDistinct) {
+  KDMESH_REQUIRE_TETGEN();
   // Points one ulp apart are distinct points; both kernels must keep all of them.
   PointSet ps = random_points(200, 11);
   for (std::uint32_t i = 0; i < 20; ++i) {
@@ -377,6 +384,7 @@ TEST(Reference, NearDuplicatesStayDistinct) {
 }
 
 TEST(Reference, DegenerateInputsThrowGeometryError) {
+  KDMESH_REQUIRE_TETGEN();
   PointSet planar;  // coplanar, not axis-aligned (TetGen would crash on it)
   Rng rng(9);
   for (int i = 0; i < 50; ++i) {

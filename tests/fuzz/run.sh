@@ -43,7 +43,9 @@ declare -A LIBS=(
 # The solver-format readers (round trips of the writers).
 [ -f tests/fuzz/fuzz_msh.cpp ] && SOURCES[msh]="$IO_READERS" && LIBS[msh]=""
 [ -f tests/fuzz/fuzz_medit.cpp ] && SOURCES[medit]="$IO_READERS" && LIBS[medit]=""
-[ -f tests/fuzz/fuzz_config.cpp ] && SOURCES[config]="tools/lib/job_config.cpp tools/lib/job_paths.cpp io/file_io.cpp $ORDERS" && LIBS[config]="-lyaml-cpp -lpthread"
+# (mesher/tetgen_delaunay.cpp without KDMESH_WITH_TETGEN is only tetgen_available() and its
+# message, which job_config asks for `check: [tetgen]`: no TetGen, no CGAL here.)
+[ -f tests/fuzz/fuzz_config.cpp ] && SOURCES[config]="tools/lib/job_config.cpp tools/lib/job_paths.cpp io/file_io.cpp $ORDERS mesher/tetgen_delaunay.cpp" && LIBS[config]="-lyaml-cpp -lpthread"
 
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=($(printf '%s\n' "${!SOURCES[@]}" | sort))

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "mesher/reference_delaunay.h"
 #include "tools/kdmesh/cli.h"
 #include "tools/kdmesh/mesh_options.h"
 #include "tools/lib/job_config.h"
@@ -51,6 +52,7 @@ MeshJob config_job(const std::string& file, const std::string& name) {
 }
 
 int run_compare(const Options& o) {
+  if (!tetgen_available()) throw UsageError(without_tetgen_message("compare-tetgen"));
   const Output& out = o.out;
   MeshJob job;
   if (!o.config.empty()) {

@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/memory_amount.h"
 #include "mesher/order.h"
+#include "mesher/reference_delaunay.h"
 #include "mesher/surface_repair.h"
 
 namespace kdmesh::cli {
@@ -54,6 +55,7 @@ MeshJob make_mesh_job(const MeshCliOptions& o) {
   job.seed = o.seed;
   job.order.seed = o.seed;
   for (const std::string& c : o.checks) {
+    if (c == "tetgen" && !tetgen_available()) throw UsageError(without_tetgen_message("--check tetgen"));
     if (c == "tetgen") job.check_tetgen = true;
     if (c == "delaunay") job.check_delaunay = true;
   }

@@ -93,6 +93,10 @@ std::vector<Planned> make_plan(const BenchOptions& o, std::vector<std::string>& 
     for (Distribution d : all_distributions()) dists.emplace_back(distribution_name(d));
   for (const std::string& d : dists) parse_distribution(d);  // throws UsageError
   std::vector<std::string> kernels = o.kernels.empty() ? kAllKernels : o.kernels;
+  if (!tetgen_available()) {  // by default every kernel this build has; asked for, a clear error
+    if (o.kernels.empty()) std::erase(kernels, std::string("tetgen"));
+    else if (contains(kernels, "tetgen")) throw UsageError(without_tetgen_message("bench --kernels tetgen"));
+  }
   for (const std::string& k : kernels)
     if (!contains(kAllKernels, k))
       throw UsageError("bench: unknown kernel '" + k + "' (valid: kdmesh, cgal, tetgen)");

@@ -19,6 +19,7 @@
 #include "core/memory_amount.h"
 #include "io/file_io.h"
 #include "io/surface_io.h"
+#include "mesher/reference_delaunay.h"
 #include "mesher/surface_repair.h"
 #include "tools/lib/job_paths.h"
 
@@ -464,6 +465,7 @@ class Loader {
       if (!c.IsSequence()) fail(c, key("check") + ": expected a list of " + join(kChecks) + ", got " + describe(c));
       for (std::size_t i = 0; i < c.size(); ++i) {
         const std::string name = c[i].IsScalar() ? c[i].Scalar() : std::string();
+        if (name == "tetgen" && !tetgen_available()) fail(c[i], key("check") + ": " + without_tetgen_message("tetgen"));
         if (name == "tetgen") job.check_tetgen = true;
         else if (name == "delaunay") job.check_delaunay = true;
         else {

@@ -28,6 +28,7 @@
 #include "mesher/mesh_check.h"
 #include "mesher/mesh_solid.h"
 #include "mesher/quality.h"
+#include "mesher/reference_delaunay.h"
 #include "mesher/tet_compare.h"
 #include "tools/lib/delaunay_verify.h"
 #include "tools/lib/job_paths.h"
@@ -280,6 +281,9 @@ MeshResult run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann
   if (!(params.scale > 0)) throw UsageError("job '" + job.name + "': scale must be > 0");
   if (!(params.sizing.max_size > 0)) throw UsageError("job '" + job.name + "': size must be > 0");
   check_option_ranges(params);  // before any work: numbers in the range the pipeline computes in
+  // before any work, not after minutes of meshing
+  if (job.check_tetgen && !tetgen_available())
+    throw UsageError("job '" + job.name + "': " + without_tetgen_message("check tetgen"));
   check_job_paths(job);         // outputs may be written, none is an input or shared
   Stopwatch total, clock;
   j["notices"] = nlohmann::json::array();

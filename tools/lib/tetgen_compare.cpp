@@ -36,10 +36,12 @@
 #include <sstream>
 #include <unordered_set>
 
+#ifdef KDMESH_WITH_TETGEN  // else run_tetgen refuses before the child would call TetGen
 #ifndef TETLIBRARY
 #define TETLIBRARY  // as libtet was built (its terminatetetgen throws instead of exiting)
 #endif
 #include <tetgen.h>
+#endif
 
 #include "core/fe_mesh.h"
 #include "core/timer.h"
@@ -329,6 +331,10 @@ T* new_array(const std::vector<U>& v) {
   std::memcpy(h.magic, kMagic, sizeof kMagic);
   std::vector<double> points;
   std::vector<std::uint32_t> tets;
+#ifndef KDMESH_WITH_TETGEN
+  (void)s, (void)holes, (void)bg, (void)switches;
+  h.status = 2;  // unreachable: run_tetgen refuses first
+#else
   try {
     tetgenio in, out, bgm;
     in.firstnumber = 0;
@@ -399,6 +405,7 @@ T* new_array(const std::vector<U>& v) {
   } catch (...) {
     h.status = 2;
   }
+#endif
   if (h.status != 0) {
     h.points = h.tets = 0;
     points.clear();
@@ -449,6 +456,7 @@ std::vector<std::pair<std::string, double>> parse_stage_times(const std::string&
 
 TetgenRun run_tetgen(const PreparedSurface& surface, const PointSet& holes, const BackgroundMesh* background,
                      const std::string& switches, double timeout_seconds) {
+  if (!tetgen_available()) throw UsageError(without_tetgen_message("run_tetgen"));
   const bool metric = switches.find('m') != std::string::npos;
   if (metric != (background != nullptr))
     throw UsageError("run_tetgen: a background mesh goes with the m switch and only with it");
@@ -676,6 +684,7 @@ nlohmann::json error_json(ExitCode code, const std::string& message) {
 }  // namespace
 
 TetgenComparison compare_with_tetgen(MeshJob job, const TetgenCompareOptions& options, const MeshJobCallbacks& cb) {
+  if (!tetgen_available()) throw UsageError(without_tetgen_message("compare-tetgen"));
   auto log = [&](const std::string& s) {
     if (cb.log) cb.log(s);
   };
