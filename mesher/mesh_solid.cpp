@@ -412,11 +412,7 @@ FeMesh fe_groups(const Job& job, const PreparedSurface& surface, const SurfaceQu
 MeshResult run(const Job& job, SurfaceMesh raw) {
   const MeshParams& params = job.params;
   MeshReport& report = job.report;
-  if (!(params.scale > 0)) throw UsageError("job '" + params.name + "': scale must be > 0");
-  if (!(params.sizing.max_size > 0)) throw UsageError("job '" + params.name + "': size must be > 0");
-  if (params.element_order != 1 && params.element_order != 2)
-    throw UsageError("job '" + params.name + "': element_order must be 1 or 2");
-  check_option_ranges(params);  // before any work: numbers in the range the pipeline computes in
+  check_mesh_params(params);  // before any work: numbers in the range the pipeline computes in
   Stopwatch clock;
   // Coordinates after scaling, sizes against the model; the default min_size is raised to
   // the smallest the mesher resolves.
@@ -459,6 +455,14 @@ MeshResult run(const Job& job, SurfaceMesh raw) {
 }
 
 }  // namespace
+
+void check_mesh_params(const MeshParams& params) {
+  if (!(params.scale > 0)) throw UsageError("job '" + params.name + "': scale must be > 0");
+  if (!(params.sizing.max_size > 0)) throw UsageError("job '" + params.name + "': size must be > 0");
+  if (params.element_order != 1 && params.element_order != 2)
+    throw UsageError("job '" + params.name + "': element_order must be 1 or 2");
+  check_option_ranges(params);
+}
 
 MeshResult mesh_solid(SurfaceMesh surface, const MeshParams& params, const MeshCallbacks& callbacks,
                       MeshReport* report) {

@@ -158,6 +158,11 @@ struct MeshResult {
   MeshReport report;
 };
 
+/// The checks mesh_solid makes of `params` before any work (scale, size, element_order, and
+/// every number within the range the pipeline computes in, mesher/numeric_ranges.h): for
+/// callers that want the usage errors before they read a file. UsageError naming the option.
+void check_mesh_params(const MeshParams& params);
+
 /// Meshes the solid bounded by `surface`. Throws kdmesh::Error subclasses (UsageError for bad
 /// params, SurfaceError for a surface that bounds no solid, GeometryError, ResourceError,
 /// CheckError when the mesh check or the boundary groups fail, CancelledError); when `report`

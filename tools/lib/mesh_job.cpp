@@ -32,7 +32,6 @@
 #include "mesher/tet_compare.h"
 #include "tools/lib/delaunay_verify.h"
 #include "tools/lib/job_paths.h"
-#include "mesher/numeric_ranges.h"
 
 namespace kdmesh {
 
@@ -278,9 +277,7 @@ MeshResult run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann
   MeshParams params = job;
   params.fe_groups = job.fe_groups || !job.msh.empty() || !job.inp.empty() || !job.medit.empty() ||
                      !job.boundary_vtu.empty();
-  if (!(params.scale > 0)) throw UsageError("job '" + job.name + "': scale must be > 0");
-  if (!(params.sizing.max_size > 0)) throw UsageError("job '" + job.name + "': size must be > 0");
-  check_option_ranges(params);  // before any work: numbers in the range the pipeline computes in
+  check_mesh_params(params);  // usage errors before the file is read
   // before any work, not after minutes of meshing
   if (job.check_tetgen && !tetgen_available())
     throw UsageError("job '" + job.name + "': " + without_tetgen_message("check tetgen"));

@@ -35,10 +35,9 @@ using namespace kdmesh;
 
 namespace {
 
-/// A finished job: the mesh and its summary (the CLI's --summary JSON, as text).
+/// A finished job's mesh (its summary goes to Python separately, as JSON text).
 struct PyMesh {
   MeshResult result;
-  std::string summary;
   bool has_fe = false;
 };
 
@@ -174,7 +173,6 @@ py::tuple run(py::object surface, const std::string& options_json, py::object pr
       err = d;
     }
   }
-  out->summary = summary.dump();
   py::object mesh = err.is_none() ? py::cast(std::move(out)) : py::object(py::none());
   return py::make_tuple(mesh, summary.dump(), err, interrupted);
 }
