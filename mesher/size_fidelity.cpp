@@ -35,16 +35,25 @@ SizeFidelity measure_size_fidelity(const PointSet& points, const std::vector<std
   SizeFidelity r;
   r.edges = edges.size();
   if (edges.empty()) return r;
-  double sum = 0;
+  double sum = 0, away_sum = 0;
   std::size_t in = 0, lo = 0, hi = 0;
+  const double far = sizing.max_size();
+  // The field is exactly h_max where nothing refines it (a min over terms that are all >= it).
+  const auto unrefined = [&](const double* x) { return !(sizing(x) < far); };
   r.min_ratio = INFINITY;
   r.max_ratio = 0;
   for (const std::uint64_t e : edges) {
     const double* a = points.p(std::uint32_t(e >> 32));
     const double* b = points.p(std::uint32_t(e));
     const double m[3] = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
-    const double ratio = std::hypot(b[0] - a[0], b[1] - a[1], b[2] - a[2]) / sizing(m);
+    const double length = std::hypot(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
+    const double hm = sizing(m);
+    const double ratio = length / hm;
     sum += ratio;
+    if (!(hm < far) && unrefined(a) && unrefined(b)) {
+      ++r.away_edges;
+      away_sum += length / far;
+    }
     if (ratio < 0.7) ++lo;
     else if (ratio > 1.4) ++hi;
     else ++in;
@@ -56,6 +65,7 @@ SizeFidelity measure_size_fidelity(const PointSet& points, const std::vector<std
   r.in_range = double(in) / n;
   r.short_fraction = double(lo) / n;
   r.long_fraction = double(hi) / n;
+  r.away_mean_ratio = r.away_edges ? away_sum / double(r.away_edges) : 0;
   return r;
 }
 

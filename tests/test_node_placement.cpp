@@ -619,6 +619,39 @@ TEST(SizeFidelity, RightCornerTetByHand) {
   EXPECT_EQ(measure_size_fidelity(p, {}, h).edges, 0u);
   EXPECT_THROW(measure_size_fidelity(p, {0, 1, 2}, h), UsageError);
   EXPECT_THROW(measure_size_fidelity(p, {0, 1, 2, 4}, h), UsageError);
+  // No zone: every edge is away from refinement, each measured against h_max = 1.
+  EXPECT_EQ(f.away_edges, 6u);
+  EXPECT_NEAR(f.away_mean_ratio, f.mean_ratio, 1e-15);
+}
+
+TEST(SizeFidelity, AwayFromRefinementCountsOnlyEdgesTheFieldLeavesAtTheUsersSize) {
+  // h_max = 1, a point zone of size 0.1 at the origin, gradation 0.3: h(x) = min(1, 0.1 + 0.3 |x|)
+  // is below 1 within |x| < 3. Two tets: one at the zone (every edge refined), one with all
+  // four corners (and so every midpoint) farther than 3 from it: a right corner tet of legs 2,
+  // edges 2 (three) and 2 sqrt2 (three), mean length 1 + sqrt2 = that over h_max = 1.
+  PointSet p;
+  for (const double o : {0.0, 10.0}) {
+    const double l = o == 0 ? 1 : 2;
+    p.push_back(o, o, o);
+    p.push_back(o + l, o, o);
+    p.push_back(o, o + l, o);
+    p.push_back(o, o, o + l);
+  }
+  SurfaceMesh s;
+  s.points = p;
+  SizingOptions o;
+  o.max_size = 1;
+  SizingZone z;
+  z.kind = SizingZone::Kind::point;
+  z.size = 0.1;
+  z.coords = {0, 0, 0};
+  o.zones.push_back(z);
+  const SizingField h = build_sizing_field(s, o);
+  const SizeFidelity f = measure_size_fidelity(p, {0, 1, 2, 3, 4, 5, 6, 7}, h);
+  EXPECT_EQ(f.edges, 12u);
+  EXPECT_EQ(f.away_edges, 6u);
+  EXPECT_NEAR(f.away_mean_ratio, 1 + std::sqrt(2.0), 1e-12);
+  EXPECT_GT(f.mean_ratio, 2);  // the refined tet's edges are long for h = 0.1 + ...
 }
 
 }  // namespace

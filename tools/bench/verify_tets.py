@@ -157,15 +157,21 @@ def _read_tetgen(ele_path):
     return pts, lut[ele]
 
 
-def read_tets(path):
+def read_mesh(path):
+    """Points, tets and point data (a dict of arrays; empty for TetGen's .ele)."""
     if path.endswith(".ele"):
-        return _read_tetgen(path)
+        return (*_read_tetgen(path), {})
     import meshio
     m = meshio.read(path)
+    pts = np.asarray(m.points, dtype=np.float64)[:, :3]
     tets = [c.data for c in m.cells if c.type == "tetra"]
-    if not tets:
-        return np.asarray(m.points, dtype=np.float64)[:, :3], np.zeros((0, 4), dtype=np.int64)
-    return np.asarray(m.points, dtype=np.float64)[:, :3], np.concatenate(tets).astype(np.int64)
+    tets = np.concatenate(tets).astype(np.int64) if tets else np.zeros((0, 4), dtype=np.int64)
+    return pts, tets, {k: np.asarray(v, dtype=np.float64).reshape(len(pts), -1)
+                       for k, v in m.point_data.items()}
+
+
+def read_tets(path):
+    return read_mesh(path)[:2]
 
 
 # ------------------------------------------------------------------ geometry
@@ -429,7 +435,7 @@ def verify(mpath, spath, h, tol_vol=0.005, tol_on=1e-6):
     spts, sfaces = read_surface(spath)
     diag = float(np.linalg.norm(spts.max(0) - spts.min(0)))
     svol = surface_volume(spts, sfaces)
-    pts, tets = read_tets(mpath)
+    pts, tets, point_data = read_mesh(mpath)
     res["tets"] = int(len(tets))
     res["input_volume"] = svol
     res["bbox_diag"] = diag
@@ -510,7 +516,17 @@ def verify(mpath, spath, h, tol_vol=0.005, tol_on=1e-6):
     ue = np.unique(e[:, 0] * n + e[:, 1])
     i, j = ue // n, ue % n
     res["edges"] = int(len(ue))
-    res["mean_edge_over_h"] = float(np.linalg.norm(pts[i] - pts[j], axis=1).mean() / h)
+    lengths = np.linalg.norm(pts[i] - pts[j], axis=1)
+    res["mean_edge_over_h"] = float(lengths.mean() / h)
+    # Size fidelity away from refinement, for a mesher that records its target size per node
+    # (kdmesh's VTU point data "target_size"): the edges whose two ends both have the size
+    # asked for, h (no zone and no automatic term shrank it there), mean length / h.
+    target = point_data.get("target_size")
+    if target is not None and target.shape[1] == 1:
+        target = target[:, 0]
+        away = (target[i] >= h * (1 - 1e-6)) & (target[j] >= h * (1 - 1e-6))
+        res["away_edges"] = int(away.sum())
+        res["away_edge_over_h"] = float(lengths[away].mean() / h) if away.any() else None
     res["verify_seconds"] = round(time.time() - t0, 3)
     res["pass"] = not R
     return res
@@ -530,9 +546,9 @@ def _write_stl(path, pts, faces):
         fh.write("endsolid t\n")
 
 
-def _write_vtu(path, pts, tets):
+def _write_vtu(path, pts, tets, point_data=None):
     import meshio
-    meshio.write(path, meshio.Mesh(pts, [("tetra", tets)]))
+    meshio.write(path, meshio.Mesh(pts, [("tetra", tets)], point_data=point_data or {}))
 
 
 def self_test():
@@ -564,6 +580,19 @@ def self_test():
         assert abs(r["volume_rel_err"]) < 1e-12 and r["tets"] == 6
         assert r["boundary_max_dist_over_h"] < 1e-12
         assert abs(r["min_dihedral_deg"] - 45) < 1e-6 and abs(r["max_dihedral_deg"] - 90) < 1e-6, r
+        assert "away_edges" not in r, r  # no target sizes recorded
+        ok += 1
+        # size fidelity away from refinement: corner 0 refined (target 0.25 < h = 0.5), the
+        # rest at h. The Kuhn tets' edges: 12 cube edges (1), 6 face diagonals (sqrt2), the
+        # space diagonal 0-7 (sqrt3); those at corner 0 (3 edges, 3 diagonals, 0-7) drop out,
+        # leaving 9 edges of length 1 and 3 diagonals: mean (9 + 3 sqrt2) / 12 / 0.5.
+        target = np.full(8, 0.5)
+        target[0] = 0.25
+        sized = os.path.join(d, "sized.vtu")
+        _write_vtu(sized, cube, tets, {"target_size": target})
+        r = verify(sized, stl, 0.5)
+        assert r["pass"] and r["away_edges"] == 12, r
+        assert abs(r["away_edge_over_h"] - (9 + 3 * np.sqrt(2)) / 12 / 0.5) < 1e-12, r
         ok += 1
         # one flipped tet
         bad = tets.copy()

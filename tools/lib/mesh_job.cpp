@@ -71,7 +71,11 @@ std::string format_job_report(const nlohmann::json& j) {
     const nlohmann::json& f = j["size_fidelity"];
     s << "  size          mean edge/target " << num(f, "mean_ratio") << ", "
       << 100 * num(f, "fraction_in_range") << "% of " << cnt(f, "edges")
-      << " edges in [0.7, 1.4]\n";
+      << " edges in [0.7, 1.4]";
+    if (cnt(f, "away_edges") > 0)
+      s << "; away from refinement " << num(f, "away_mean_ratio") << " of the size asked ("
+        << cnt(f, "away_edges") << " edges)";
+    s << "\n";
   }
   if (j.contains("delaunay_check"))
     s << "  delaunay      " << (j["delaunay_check"].value("pass", false) ? "ok" : "FAIL") << "\n";
@@ -169,7 +173,9 @@ nlohmann::json size_fidelity_json(const SizeFidelity& f) {
           {"short_fraction", f.short_fraction},
           {"long_fraction", f.long_fraction},
           {"min_ratio", f.min_ratio},
-          {"max_ratio", f.max_ratio}};
+          {"max_ratio", f.max_ratio},
+          {"away_edges", f.away_edges},
+          {"away_mean_ratio", f.away_mean_ratio}};
 }
 
 /// The summary's groups: name, dim, how many entities each lists and how many elements of its
