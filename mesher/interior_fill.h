@@ -35,6 +35,17 @@ struct InteriorFillOptions {
   /// slivers (114 tets under 5 deg at diag/40, 4 with 32 tries, for 5% more nodes and time).
   int layer_tries = 32;
   double layer_depth = 0.3;
+  /// Turn the lattice by a fixed rotation (kLatticeAxes in interior_fill.cpp, exact in
+  /// integers) so that none of its rows and planes of low index (the 13 directions <100>,
+  /// <110>, <111>) lies within 4.7 deg of a coordinate plane. Parts are often modelled along
+  /// the axes; a lattice row parallel to a row of surface nodes on an axis-aligned crease made
+  /// sheets of coplanar nodes, hence slivers the quality pass could not undo (handle.ply, a
+  /// cylinder faceted in strips along y: min dihedral 10.3 / 7.7 deg at diag/40 / 80 with the
+  /// axis-aligned lattice; the same part turned by three random rotations gave 12.5-15.1 /
+  /// 12.4-20.2).
+  /// false: the lattice's axes are the coordinate axes. Either way the lattice is anchored at
+  /// the origin of coordinates.
+  bool rotate_lattice = true;
   std::uint64_t seed = 1;  ///< for the boundary layer
   /// Threads for candidate generation (the result does not depend on it).
   unsigned threads = 2;

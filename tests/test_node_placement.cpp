@@ -14,6 +14,7 @@
 
 #include "core/error.h"
 #include "mesher/edge_sampling.h"
+#include "mesher/interior_fill.h"
 #include "mesher/node_placement.h"
 #include "mesher/size_fidelity.h"
 #include "mesher/spacing_grid.h"
@@ -221,6 +222,84 @@ TEST(NodePlacement, CylinderInteriorNodesInsideAndClearWithOtherClearance) {
   o.interior_clearance = 1.3;
   const NodeSet ns = place_nodes(m.surface, q, m.features, h, o);
   expect_interior_clear(m, ns, h, 1.3);
+}
+
+/// The lattice nodes of fill_interior in a box (no boundary layer) and the nearest-neighbour
+/// vectors of those well inside it.
+struct LatticeSample {
+  NodeSet nodes;
+  std::vector<std::array<double, 3>> neighbour_vectors;
+};
+
+LatticeSample fill_box_lattice(bool rotate, double h) {
+  const Model m = box(1, 1.3, 0.7);
+  const SurfaceQuery q(m.surface.mesh);
+  const SizingField field = uniform(m, h);
+  InteriorFillOptions o;
+  o.rotate_lattice = rotate;
+  o.layer_tries = 0;
+  const double glo[3] = {-1, -1, -1};
+  SpacingGrid grid(glo, h / 4);
+  LatticeSample r;
+  fill_interior(m.surface.mesh, m.surface.bbox_min, m.surface.bbox_max, q, field, o, grid, r.nodes);
+  const double a = o.kappa * h;  // one level: h is uniform
+  for (std::uint32_t i = 0; i < r.nodes.size_count(); ++i) {
+    const double* p = r.nodes.points.p(i);
+    if (q.distance(p) < 2 * a) continue;
+    for (std::uint32_t j = 0; j < r.nodes.size_count(); ++j) {
+      const double* s = r.nodes.points.p(j);
+      if (j != i && dist(p, s) < 0.9 * a)  // the 8 body-diagonal neighbours, a sqrt3/2 away
+        r.neighbour_vectors.push_back({s[0] - p[0], s[1] - p[1], s[2] - p[2]});
+    }
+  }
+  return r;
+}
+
+/// The smallest angle (deg) between any of the vectors and a coordinate plane.
+double least_angle_to_axis_planes(const std::vector<std::array<double, 3>>& vs) {
+  double least = 90;
+  for (const auto& v : vs) {
+    const double n = std::hypot(v[0], v[1], v[2]);
+    for (const double c : v) least = std::min(least, std::asin(std::abs(c) / n) * 180 / std::numbers::pi);
+  }
+  return least;
+}
+
+// Regression, handle.ply (issue 18): an axis-aligned lattice put rows of interior nodes in
+// one plane with rows of surface nodes on the axis-aligned creases of a faceted scan, and the
+// quality pass could not undo the sheets of slivers between them (7.7 deg at diag/80). The
+// lattice is turned now, and exactly: every node is q M U for an integer vector U of one
+// parity (M = kLatticeAxes, q = kappa h / 14 rounded to 16 bits), so the lattice's own ties
+// stay exact (a rotation in floating point made the gear box drop 7,610 nodes as flat).
+TEST(InteriorFill, LatticeIsTurnedOffTheAxesAndExact) {
+  const double h = 0.1;
+  const LatticeSample turned = fill_box_lattice(true, h);
+  ASSERT_GT(turned.neighbour_vectors.size(), 100u);
+  // The BCC neighbours lie along the turned <111> directions, all >= 4.7 deg off every
+  // coordinate plane (the axis-aligned lattice's lie 35.3 deg off; its <100> rows on them).
+  EXPECT_GT(least_angle_to_axis_planes(turned.neighbour_vectors), 4.7);
+  const double kM[3][3] = {{6, 3, 2}, {2, -6, 3}, {3, -2, -6}};
+  int e = 0;
+  const double mantissa = std::frexp(InteriorFillOptions{}.kappa * h / 14, &e);
+  const double q = std::ldexp(std::nearbyint(std::ldexp(mantissa, 16)), e - 16);
+  for (std::uint32_t i = 0; i < turned.nodes.size_count(); ++i) {
+    const double* p = turned.nodes.points.p(i);
+    double u[3];
+    for (int ax = 0; ax < 3; ++ax)  // U = M^T p / (49 q), exact for an exact lattice point
+      u[ax] = (kM[0][ax] * p[0] + kM[1][ax] * p[1] + kM[2][ax] * p[2]) / (49 * q);
+    for (int ax = 0; ax < 3; ++ax) {
+      ASSERT_NEAR(u[ax], std::nearbyint(u[ax]), 1e-6) << "node " << i;
+      const std::int64_t U[3] = {std::llround(u[0]), std::llround(u[1]), std::llround(u[2])};
+      ASSERT_EQ(U[0] & 1, U[ax] & 1) << "node " << i << ": mixed parity";
+      // ... and its coordinates are exactly q M U.
+      const double exact = q * double(std::int64_t(kM[ax][0]) * U[0] +
+                                      std::int64_t(kM[ax][1]) * U[1] + std::int64_t(kM[ax][2]) * U[2]);
+      ASSERT_EQ(p[ax], exact) << "node " << i << " axis " << ax;
+    }
+  }
+  // With the option off, the rows are the coordinate axes' <111> diagonals again.
+  const LatticeSample aligned = fill_box_lattice(false, h);
+  EXPECT_NEAR(least_angle_to_axis_planes(aligned.neighbour_vectors), 35.26, 0.01);
 }
 
 // ---- corners and feature edges ----
