@@ -72,8 +72,17 @@ class Hid {
   herr_t (*close_)(hid_t);
 };
 
-/// Writes `data` (rows x cols, or rows when cols == 0) as the dataset `name` (intermediate
-/// groups created) of `file`, stored as `file_type`.
+/// Creates the group `name` of `file` (its parent exists), without modification times.
+void create_group(hid_t file, const char* name, const std::string& report_as) {
+  Hid gcpl(H5Pcreate(H5P_GROUP_CREATE), H5Pclose);
+  if (!gcpl.ok() || H5Pset_obj_track_times(gcpl.get(), 0) < 0)
+    throw OutputError(report_as, std::string("HDF5: cannot set the properties of group ") + name);
+  Hid group(H5Gcreate2(file, name, H5P_DEFAULT, gcpl.get(), H5P_DEFAULT), H5Gclose);
+  if (!group.ok() || !group.close()) throw OutputError(report_as, std::string("HDF5: cannot create group ") + name);
+}
+
+/// Writes `data` (rows x cols, or rows when cols == 0) as the dataset `name` (its group
+/// exists) of `file`, stored as `file_type`.
 template <class T>
 void write_dataset(hid_t file, const std::string& name, hid_t mem_type, hid_t file_type,
                    const std::vector<T>& data, std::size_t rows, std::size_t cols,
@@ -84,9 +93,10 @@ void write_dataset(hid_t file, const std::string& name, hid_t mem_type, hid_t fi
   const hsize_t dims[2] = {hsize_t(rows), hsize_t(cols)};
   Hid space(H5Screate_simple(cols ? 2 : 1, dims, nullptr), H5Sclose);
   if (!space.ok()) fail("describe");
-  Hid lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
-  if (!lcpl.ok() || H5Pset_create_intermediate_group(lcpl.get(), 1) < 0) fail("create the groups of");
-  Hid set(H5Dcreate2(file, name.c_str(), file_type, space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+  // no modification times: the same mesh gives the same bytes
+  Hid dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+  if (!dcpl.ok() || H5Pset_obj_track_times(dcpl.get(), 0) < 0) fail("set the properties of");
+  Hid set(H5Dcreate2(file, name.c_str(), file_type, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
           H5Dclose);
   if (!set.ok()) fail("create");
   if (!data.empty() && H5Dwrite(set.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()) < 0)
@@ -117,6 +127,8 @@ void write_hdf5(const FeMesh& mesh, const FeIndex& index, const std::string& h5_
   Hid file(H5Fcreate(h5_file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
   if (!file.ok()) throw OutputError(h5_file, "HDF5: cannot create the file");
   const hid_t f = file.get();
+  for (const char* group : {"/Mesh", "/Mesh/mesh", "/MeshTags", "/MeshTags/cell_tags", "/MeshTags/facet_tags"})
+    create_group(f, group, h5_file);
   write_dataset(f, "/Mesh/mesh/geometry", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, mesh.points.xyz,
                 mesh.points.size(), 3, h5_file);
   write_dataset(f, "/Mesh/mesh/topology", H5T_NATIVE_INT64, H5T_STD_I64LE, widen(mesh.tets),
