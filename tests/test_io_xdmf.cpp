@@ -198,7 +198,7 @@ TEST(XdmfFormat, UnwritablePathThrowsOutputErrorAndLeavesNoTemporary) {
   const FeMesh mesh = cube_mesh(2, 1);
   // a directory that cannot be written (root ignores permissions: use a missing directory
   // then, and a read-only one only when not root)
-  const fs::path dir = fs::path(scratch("")).concat("-dir");
+  const fs::path dir = scratch("-dir");  // removed first: reruns start clean
   fs::create_directories(dir);
   const std::string missing = (dir / "no" / "such" / "m.xdmf").string();
   try {

@@ -72,22 +72,21 @@ inline void make_quadratic(FeMesh& m) {
   m.order = 2;
 }
 
-/// The unit cube cut into n^3 subcubes (n even), each split into the 6 Kuhn tets along its
-/// main diagonal (so neighbouring subcubes share their face diagonals: a conforming mesh).
-///  - volumes: entity kLeftVolume for x < 1/2, kRightVolume for x > 1/2;
-///  - faces: the boundary triangles, one entity per cube side (kSide0 + 2 * axis + side), plus
-///    the interface x = 1/2 (kInterface), oriented +x (out of the left volume);
-///  - edges: the 12 cube edges, n segments each, curve 4 * axis + 2 * s + t;
-///  - groups: dim 3 "solid" {both}, "right_half" {kRightVolume}; dim 2 one per side, "sides"
-///    {all six}, "interface"; dim 1 "x_edges" (curves along x), "other_edges".
-/// Every face is oriented with its normal (c1-c0)x(c2-c0) pointing out of the volume it bounds.
-inline FeMesh cube_mesh(int n, int order) {
+/// The id of grid point (i, j, k) of kuhn_cube(n).
+inline std::uint32_t cube_vid(int n, int i, int j, int k) {
+  return std::uint32_t(i + (n + 1) * (j + (n + 1) * k));
+}
+
+/// The unit cube's (n+1)^3 grid points (point i + (n+1)(j + (n+1)k) at (i, j, k) / n) and its
+/// n^3 subcubes each cut into the 6 positive Kuhn tets along its main diagonal (neighbouring
+/// subcubes share their face diagonals: a conforming mesh); tets 6c .. 6c+5 fill subcube
+/// c = i + n(j + n k); tet_entity 0; no faces, edges or groups.
+inline FeMesh kuhn_cube(int n) {
   FeMesh m;
-  auto vid = [n](int i, int j, int k) { return std::uint32_t(i + (n + 1) * (j + (n + 1) * k)); };
+  auto vid = [n](int i, int j, int k) { return cube_vid(n, i, j, k); };
   for (int k = 0; k <= n; ++k)
     for (int j = 0; j <= n; ++j)
       for (int i = 0; i <= n; ++i) m.points.push_back(double(i) / n, double(j) / n, double(k) / n);
-
   static const int kPerm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)
@@ -104,8 +103,43 @@ inline FeMesh cube_mesh(int n, int order) {
           if (det3(m.points.p(v[0]), m.points.p(v[1]), m.points.p(v[2]), m.points.p(v[3])) < 0)
             std::swap(v[1], v[2]);
           m.tets.insert(m.tets.end(), v, v + 4);
-          m.tet_entity.push_back(2 * i < n ? kLeftVolume : kRightVolume);
+          m.tet_entity.push_back(0);
         }
+  return m;
+}
+
+/// Appends the 12 edges of the cube of kuhn_cube(n), n segments each, with entity
+/// curve0 + 4 * axis + 2 * s + t (the edge along `axis` at the other two coordinates s, t).
+inline void add_cube_edges(FeMesh& m, int n, std::uint32_t curve0) {
+  auto vid = [n](int i, int j, int k) { return cube_vid(n, i, j, k); };
+  for (int axis = 0; axis < 3; ++axis)
+    for (int s = 0; s < 2; ++s)
+      for (int t = 0; t < 2; ++t)
+        for (int step = 0; step < n; ++step) {
+          int c[3];
+          c[axis] = step;
+          c[(axis + 1) % 3] = s * n;
+          c[(axis + 2) % 3] = t * n;
+          const std::uint32_t a = vid(c[0], c[1], c[2]);
+          ++c[axis];
+          m.edges.insert(m.edges.end(), {a, vid(c[0], c[1], c[2])});
+          m.edge_entity.push_back(curve0 + std::uint32_t(4 * axis + 2 * s + t));
+        }
+}
+
+/// The unit cube cut into n^3 subcubes (n even), each split into the 6 Kuhn tets along its
+/// main diagonal (so neighbouring subcubes share their face diagonals: a conforming mesh).
+///  - volumes: entity kLeftVolume for x < 1/2, kRightVolume for x > 1/2;
+///  - faces: the boundary triangles, one entity per cube side (kSide0 + 2 * axis + side), plus
+///    the interface x = 1/2 (kInterface), oriented +x (out of the left volume);
+///  - edges: the 12 cube edges, n segments each, curve 4 * axis + 2 * s + t;
+///  - groups: dim 3 "solid" {both}, "right_half" {kRightVolume}; dim 2 one per side, "sides"
+///    {all six}, "interface"; dim 1 "x_edges" (curves along x), "other_edges".
+/// Every face is oriented with its normal (c1-c0)x(c2-c0) pointing out of the volume it bounds.
+inline FeMesh cube_mesh(int n, int order) {
+  FeMesh m = kuhn_cube(n);
+  for (std::size_t t = 0; t < m.tet_entity.size(); ++t)
+    m.tet_entity[t] = 2 * ((t / 6) % std::size_t(n)) < std::size_t(n) ? kLeftVolume : kRightVolume;
 
   // Faces: boundary (once in the tets) and the interface x = 1/2 (twice, taken from the left).
   // The outward listing of the face opposite corner i of a positive tet (c0 c1 c2 c3).
@@ -137,19 +171,7 @@ inline FeMesh cube_mesh(int n, int order) {
       m.face_entity.push_back(entity);
     }
 
-  for (int axis = 0; axis < 3; ++axis)
-    for (int s = 0; s < 2; ++s)
-      for (int t = 0; t < 2; ++t)
-        for (int step = 0; step < n; ++step) {
-          int c[3];
-          c[axis] = step;
-          c[(axis + 1) % 3] = s * n;
-          c[(axis + 2) % 3] = t * n;
-          const std::uint32_t a = vid(c[0], c[1], c[2]);
-          ++c[axis];
-          m.edges.insert(m.edges.end(), {a, vid(c[0], c[1], c[2])});
-          m.edge_entity.push_back(std::uint32_t(4 * axis + 2 * s + t));
-        }
+  add_cube_edges(m, n, 0);
 
   m.groups.push_back({"solid", 3, {kLeftVolume, kRightVolume}});
   m.groups.push_back({"right_half", 3, {kRightVolume}});
