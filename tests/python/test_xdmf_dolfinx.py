@@ -80,8 +80,8 @@ def test_dolfinx_reads_mesh_cell_tags_and_facet_tags(tmp_path):
     assert got["facet_tag_counts"] == {"0": len(m.boundary_faces) - len(faces), str(load): len(faces)}
 
 
-def test_cli_batch_and_python_write_the_same_xdmf(tmp_path):
-    """kdmesh mesh --xdmf (the job runner) writes what kdmesh.write_xdmf writes, byte for byte,
+def test_cli_and_python_write_the_same_xdmf(tmp_path):
+    """kdmesh mesh --xdmf (through the job runner) writes what kdmesh.write_xdmf writes, byte for byte,
     and lists both files among the summary's outputs; dolfinx reads the quadratic mesh too."""
     need_dolfinx()
     (tmp_path / "cli").mkdir()
