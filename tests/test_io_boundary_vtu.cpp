@@ -28,6 +28,7 @@
 #include "core/error.h"
 #include "core/fe_mesh.h"
 #include "io/boundary_vtu_writer.h"
+#include "tests/support/fe_cube.h"
 #include "tests/support/scratch.h"
 
 namespace kdmesh {
@@ -55,14 +56,6 @@ std::vector<std::string> leftover_temps(const std::string& path) {
   return found;
 }
 
-double det3(const double* a, const double* b, const double* c, const double* d) {
-  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  const double w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-  return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
-         u[2] * (v[0] * w[1] - v[1] * w[0]);
-}
-
 constexpr std::uint32_t kPatch0 = 10;  // patches 10 (x = 0), 11 (x = 1), 12 (y = 0), ... 15 (z = 1)
 constexpr std::uint32_t kCurve0 = 3;   // curves 3 .. 14: 4 * axis + 2 * s + t + kCurve0
 
@@ -76,29 +69,7 @@ constexpr std::uint32_t kCurve0 = 3;   // curves 3 .. 14: 4 * axis + 2 * s + t +
 ///   6 "corner_edges" dim 1 {curves 3 and 14}
 /// With order 2: one mid-edge node per distinct edge, at its midpoint (FeMesh node order).
 FeMesh cube(int n, int order) {
-  FeMesh m;
-  auto vid = [n](int i, int j, int k) { return std::uint32_t(i + (n + 1) * (j + (n + 1) * k)); };
-  for (int k = 0; k <= n; ++k)
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i <= n; ++i) m.points.push_back(double(i) / n, double(j) / n, double(k) / n);
-  static const int kPerm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i)
-        for (const auto& p : kPerm) {
-          int c[3] = {i, j, k};
-          std::uint32_t v[4];
-          v[0] = vid(c[0], c[1], c[2]);
-          for (int s = 0; s < 2; ++s) {
-            ++c[p[s]];
-            v[s + 1] = vid(c[0], c[1], c[2]);
-          }
-          v[3] = vid(i + 1, j + 1, k + 1);
-          if (det3(m.points.p(v[0]), m.points.p(v[1]), m.points.p(v[2]), m.points.p(v[3])) < 0)
-            std::swap(v[1], v[2]);
-          m.tets.insert(m.tets.end(), v, v + 4);
-          m.tet_entity.push_back(0);
-        }
+  FeMesh m = test::kuhn_cube(n);
   // Boundary faces: tet faces (outward listing) whose three corners lie on one cube side.
   static const int kOutward[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   for (std::size_t t = 0; t < m.tet_entity.size(); ++t)
@@ -111,19 +82,7 @@ FeMesh cube(int n, int order) {
             m.face_entity.push_back(kPatch0 + std::uint32_t(2 * axis + side));
           }
     }
-  for (int axis = 0; axis < 3; ++axis)
-    for (int s = 0; s < 2; ++s)
-      for (int t = 0; t < 2; ++t)
-        for (int step = 0; step < n; ++step) {
-          int c[3];
-          c[axis] = step;
-          c[(axis + 1) % 3] = s * n;
-          c[(axis + 2) % 3] = t * n;
-          const std::uint32_t a = vid(c[0], c[1], c[2]);
-          ++c[axis];
-          m.edges.insert(m.edges.end(), {a, vid(c[0], c[1], c[2])});
-          m.edge_entity.push_back(kCurve0 + std::uint32_t(4 * axis + 2 * s + t));
-        }
+  test::add_cube_edges(m, n, kCurve0);
   m.groups.push_back({"solid", 3, {0}});
   m.groups.push_back({"xmin", 2, {kPatch0}});
   m.groups.push_back({"walls", 2, {kPatch0, kPatch0 + 1, kPatch0 + 2}});
@@ -131,39 +90,7 @@ FeMesh cube(int n, int order) {
   m.groups.push_back({"load", 1, {kCurve0, kCurve0 + 1, kCurve0 + 2, kCurve0 + 3}});
   m.groups.push_back({"entity", 2, {kPatch0 + 3, kPatch0 + 4}});
   m.groups.push_back({"corner_edges", 1, {kCurve0, kCurve0 + 11}});
-  if (order == 2) {
-    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
-    auto node = [&](std::uint32_t a, std::uint32_t b) {
-      const auto key = std::minmax(a, b);
-      if (const auto it = mid.find(key); it != mid.end()) return it->second;
-      const double* p = m.points.p(a);
-      const double* q = m.points.p(b);
-      const auto id = std::uint32_t(m.points.size());
-      m.points.push_back((p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2);
-      mid.emplace(key, id);
-      return id;
-    };
-    static const int kTetEdges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
-    std::vector<std::uint32_t> tets, faces, edges;
-    for (std::size_t t = 0; t < m.tets.size() / 4; ++t) {
-      const std::uint32_t* c = &m.tets[4 * t];
-      tets.insert(tets.end(), c, c + 4);
-      for (const auto& e : kTetEdges) tets.push_back(node(c[e[0]], c[e[1]]));
-    }
-    for (std::size_t f = 0; f < m.faces.size() / 3; ++f) {
-      const std::uint32_t* c = &m.faces[3 * f];
-      faces.insert(faces.end(), c, c + 3);
-      for (int i = 0; i < 3; ++i) faces.push_back(node(c[i], c[(i + 1) % 3]));
-    }
-    for (std::size_t e = 0; e < m.edges.size() / 2; ++e) {
-      const std::uint32_t* c = &m.edges[2 * e];
-      edges.insert(edges.end(), {c[0], c[1], node(c[0], c[1])});
-    }
-    m.tets = tets;
-    m.faces = faces;
-    m.edges = edges;
-    m.order = 2;
-  }
+  if (order == 2) test::make_quadratic(m);
   return m;
 }
 
@@ -288,7 +215,7 @@ TEST(BoundaryVtu, FacesKeepTheirOutwardOrientation) {
     double p[3][3];
     for (int i = 0; i < 3; ++i) grid->GetCell(c)->GetPoints()->GetPoint(i, p[i]);
     const double centre[3] = {0.5, 0.5, 0.5};
-    EXPECT_GT(det3(centre, p[0], p[1], p[2]), 0) << "face " << c;  // centre below the face
+    EXPECT_GT(test::det3(centre, p[0], p[1], p[2]), 0) << "face " << c;  // centre below the face
   }
 }
 

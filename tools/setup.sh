@@ -35,6 +35,7 @@ PACKAGES=(
   libfmt-dev
   libgmp-dev
   libgtest-dev
+  libhdf5-dev
   libtbb-dev
   libtet1.5-dev
   libvtk9-dev
@@ -42,6 +43,7 @@ PACKAGES=(
   nlohmann-json3-dev
   pybind11-dev
   python3-dev
+  python3-dolfinx
   python3-meshio
   python3-numpy
   python3-pytest

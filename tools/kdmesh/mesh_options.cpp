@@ -73,6 +73,7 @@ MeshJob make_mesh_job(const MeshCliOptions& o) {
   job.inp = o.inp;
   job.medit = o.medit;
   job.boundary_vtu = o.boundary_vtu;
+  job.xdmf = o.xdmf;
   job.element_order = o.element_order;
   job.msh_version = o.msh_version == "2.2" ? 22 : 41;
   job.group_options.patch_groups = job.group_options.curve_groups = o.patch_groups;
@@ -164,6 +165,10 @@ void add_mesh_job_options(CLI::App* cmd, MeshCliOptions& o, const MeshCliSpec& s
     cmd->add_option("--boundary-vtu", o.boundary_vtu,
                     "Output boundary faces and feature edges (.vtu) with patch/curve ids and a 0/1 "
                     "cell array per group")
+        ->check(non_empty_path());
+    cmd->add_option("--xdmf", o.xdmf,
+                    "Output XDMF (.xdmf, data in the .h5 beside it) for FEniCSx with cell_tags (regions) "
+                    "and facet_tags (boundary groups)")
         ->check(non_empty_path());
     cmd->add_option("--element-order", o.element_order,
                     "1: linear tets; 2: quadratic (C3D10), mid-edge nodes on the surface")

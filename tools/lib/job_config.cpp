@@ -65,7 +65,7 @@ const std::vector<std::string> kJobKeys = {"name",        "input", "scale", "siz
                                            "tolerance", "max_refinements", "timeout"};
 const std::vector<std::string> kZoneTypes = {"sharp_edges", "polyline", "segment", "plane",
                                              "point",       "box",      "ball"};
-const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes", "msh", "inp", "mesh", "boundary_vtu"};
+const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes", "msh", "inp", "mesh", "boundary_vtu", "xdmf"};
 const std::vector<std::string> kGroupKeys = {"name", "dim", "zone", "point", "box"};
 const std::vector<std::string> kChecks = {"tetgen", "delaunay"};
 
@@ -534,6 +534,7 @@ class Loader {
       if (o.count("mesh")) job.medit = resolve_output(o.at("mesh").value, k + ": key 'mesh'");
       if (o.count("boundary_vtu"))
         job.boundary_vtu = resolve_output(o.at("boundary_vtu").value, k + ": key 'boundary_vtu'");
+      if (o.count("xdmf")) job.xdmf = resolve_output(o.at("xdmf").value, k + ": key 'xdmf'");
     }
     return job;
   }
@@ -558,14 +559,9 @@ class Loader {
         if (other.name == j.name)
           fail(jobs[i]["name"] ? jobs[i]["name"] : jobs[i],
                "job '" + j.name + "': key 'name': duplicate job name (first defined at " + other.origin + ")");
-      for (const auto& [k, path] : {std::pair<const char*, const std::string*>{"vtu", &j.vtu},
-                                    {"summary", &j.summary},
-                                    {"nodes", &j.nodes},
-                                    {"msh", &j.msh},
-                                    {"inp", &j.inp},
-                                    {"mesh", &j.medit},
-                                    {"boundary_vtu", &j.boundary_vtu}}) {
-        if (path->empty()) continue;
+      for (const JobOutput& out : job_outputs(j)) {
+        const char* const k = out.key;
+        const std::string* const path = &out.path;
         std::error_code ec;
         fs::path canon_path = fs::weakly_canonical(*path, ec);
         if (ec) canon_path = fs::absolute(*path, ec).lexically_normal();

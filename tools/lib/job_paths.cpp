@@ -3,6 +3,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "io/xdmf_writer.h"
 
 namespace kdmesh {
 
@@ -17,16 +18,25 @@ void check_uses(const std::vector<PathUse>& uses, const std::string& who) {
 
 }  // namespace
 
+std::vector<JobOutput> job_outputs(const MeshJob& job) {
+  std::vector<JobOutput> out;
+  for (const JobOutput& o : {JobOutput{"vtu", "vtu output", job.vtu},
+                             {"summary", "summary output", job.summary},
+                             {"nodes", "nodes output", job.nodes},
+                             {"msh", "msh output", job.msh},
+                             {"inp", "inp output", job.inp},
+                             {"mesh", "MEDIT (mesh) output", job.medit},
+                             {"boundary_vtu", "boundary_vtu output", job.boundary_vtu},
+                             {"xdmf", "xdmf output", job.xdmf}})
+    if (!o.path.empty()) out.push_back(o);
+  if (!job.xdmf.empty())  // (last so far: right after the xdmf output)
+    out.push_back({"xdmf_h5", "xdmf output's HDF5 file", xdmf_hdf5_path(job.xdmf)});
+  return out;
+}
+
 std::vector<PathUse> job_path_uses(const MeshJob& job) {
   std::vector<PathUse> uses{{job.input, false, "input"}};
-  for (const auto& [path, label] : {std::pair<const std::string*, const char*>{&job.vtu, "vtu output"},
-                                    {&job.summary, "summary output"},
-                                    {&job.nodes, "nodes output"},
-                                    {&job.msh, "msh output"},
-                                    {&job.inp, "inp output"},
-                                    {&job.medit, "MEDIT (mesh) output"},
-                                    {&job.boundary_vtu, "boundary_vtu output"}})
-    if (!path->empty()) uses.push_back({*path, true, label});
+  for (const JobOutput& o : job_outputs(job)) uses.push_back({o.path, true, o.label});
   return uses;
 }
 

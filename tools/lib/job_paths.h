@@ -10,6 +10,19 @@
 
 namespace kdmesh {
 
+/// One file a job writes: its batch-file output key ("vtu", "summary", "nodes", "msh", "inp",
+/// "mesh" (MEDIT), "boundary_vtu", "xdmf", and "xdmf_h5" for the XDMF file's HDF5 data), a
+/// label for messages ("vtu output", ...) and the path.
+struct JobOutput {
+  const char* key;
+  const char* label;
+  std::string path;
+};
+
+/// The job's outputs in a fixed order, the empty ones left out; an xdmf output brings its HDF5
+/// file (io/xdmf_writer.h: xdmf_hdf5_path) right after it.
+std::vector<JobOutput> job_outputs(const MeshJob& job);
+
 /// The job's input and every output it writes, labelled "input", "vtu output", ... .
 std::vector<PathUse> job_path_uses(const MeshJob& job);
 

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
+#include <map>
 #include <memory>
 #include <exception>
 #include <new>
@@ -20,6 +21,7 @@
 #include "io/inp_writer.h"
 #include "io/medit_writer.h"
 #include "io/msh_writer.h"
+#include "io/xdmf_writer.h"
 #include "io/points_io.h"
 #include "io/surface_io.h"
 #include "io/vtu_writer.h"
@@ -281,8 +283,7 @@ MeshResult run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann
     if (cb.log) cb.log(s);
   };
   MeshParams params = job;
-  params.fe_groups = job.fe_groups || !job.msh.empty() || !job.inp.empty() || !job.medit.empty() ||
-                     !job.boundary_vtu.empty();
+  params.fe_groups = job.fe_groups || has_solver_outputs(job);
   check_mesh_params(params);  // usage errors before the file is read
   // before any work, not after minutes of meshing
   if (job.check_tetgen && !tetgen_available())
@@ -334,17 +335,24 @@ MeshResult run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann
   clock.reset();
   AtomicFileSet files;
   nlohmann::json outputs = nlohmann::json::object();
-  auto output = [&](const std::string& path, const char* key, const auto& write) {
-    if (path.empty()) return;
-    log("writing " + path);
+  std::map<std::string, std::string> user_path;  // temporary -> the user's path
+  auto add_file = [&](const std::string& path, const char* key) {
     make_parent_dirs(path);
     const std::string temp = files.add(path);
     outputs[key] = path;
+    user_path[temp] = path;
+    return temp;
+  };
+  auto output = [&](const std::string& path, const char* key, const auto& write) {
+    if (path.empty()) return;
+    log("writing " + path);
+    const std::string temp = add_file(path, key);
     try {
       write(temp);
     } catch (const OutputError& e) {
-      if (e.file() != temp) throw;
-      throw OutputError(path, e.reason());
+      const auto it = user_path.find(e.file());
+      if (it == user_path.end()) throw;
+      throw OutputError(it->second, e.reason());
     }
   };
   output(job.vtu, "vtu", [&](const std::string& t) { write_vtu(result.tet_mesh, t); });
@@ -361,6 +369,10 @@ MeshResult run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann
   });
   output(job.medit, "medit", [&](const std::string& t) { write_medit(fe, t); });
   output(job.boundary_vtu, "boundary_vtu", [&](const std::string& t) { write_boundary_vtu(fe, t); });
+  output(job.xdmf, "xdmf", [&](const std::string& t) {
+    const std::string h5 = xdmf_hdf5_path(job.xdmf);
+    write_xdmf_files(fe, t, add_file(h5, "xdmf_h5"), std::filesystem::path(h5).filename().string());
+  });
   if (!job.summary.empty()) outputs["summary"] = job.summary;
   j["outputs"] = outputs;
   j["status"] = "ok";
@@ -375,9 +387,13 @@ MeshResult run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann
 
 std::vector<std::string> output_paths(const MeshJob& job) {
   std::vector<std::string> paths;
-  for (const std::string* p : {&job.vtu, &job.summary, &job.nodes, &job.msh, &job.inp, &job.medit, &job.boundary_vtu})
-    if (!p->empty()) paths.push_back(*p);
+  for (const JobOutput& o : job_outputs(job)) paths.push_back(o.path);
   return paths;
+}
+
+bool has_solver_outputs(const MeshJob& job) {
+  return !job.msh.empty() || !job.inp.empty() || !job.medit.empty() || !job.boundary_vtu.empty() ||
+         !job.xdmf.empty();
 }
 
 void add_report_json(const MeshReport& r, const FeMesh* fe, nlohmann::json& j) {

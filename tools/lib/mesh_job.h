@@ -24,15 +24,20 @@ struct MeshJob : MeshParams {
   double timeout = 0;
   std::string vtu, summary, nodes;  ///< output paths (usable as is); empty = not written
   /// Solver formats (usable as is; empty = not written): Gmsh MSH, Abaqus/CalculiX INP, MEDIT,
-  /// and the boundary VTU (faces and feature edges with patch / curve ids and one 0/1 array per
-  /// boundary group, io/boundary_vtu_writer.h). Any of them turns on the boundary groups stage
-  /// (MeshParams::fe_groups).
-  std::string msh, inp, medit, boundary_vtu;
+  /// the boundary VTU (faces and feature edges with patch / curve ids and one 0/1 array per
+  /// boundary group, io/boundary_vtu_writer.h) and XDMF (with its HDF5 file beside it,
+  /// io/xdmf_writer.h). Any of them turns on the boundary groups stage (MeshParams::fe_groups).
+  std::string msh, inp, medit, boundary_vtu, xdmf;
   int msh_version = 41;        ///< 41 or 22
 };
 
-/// Every output path the job writes (the non-empty ones), e.g. to clean up after a crash.
+/// Every output path the job writes (the non-empty ones, the XDMF's HDF5 file included), e.g.
+/// to clean up after a crash.
 std::vector<std::string> output_paths(const MeshJob& job);
+
+/// Whether the job writes a solver format (msh, inp, medit, boundary_vtu, xdmf): those need
+/// the boundary groups stage.
+bool has_solver_outputs(const MeshJob& job);
 
 /// Callbacks of a running job (log, progress, cancel): those of the front door.
 using MeshJobCallbacks = MeshCallbacks;
@@ -57,7 +62,7 @@ struct MeshJobResult {
   ///            min_radius_ratio, max_radius_edge, min_dihedral_hist, radius_ratio_hist},
   ///   mesh_check {... every MeshCheck figure ..., pass, failures},
   ///   delaunay_check (when asked), notices [...], outputs {vtu, nodes, msh, inp, medit,
-  ///   boundary_vtu, summary} (the files written, by kind),
+  ///   boundary_vtu, xdmf, xdmf_h5, summary} (the files written, by kind),
   ///   error {type, exit_code, message} (failed jobs only).
   /// Keys of stages a failed job never reached are absent.
   nlohmann::json summary;

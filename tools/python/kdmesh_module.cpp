@@ -20,6 +20,7 @@
 #include "io/boundary_vtu_writer.h"
 #include "io/inp_writer.h"
 #include "io/medit_writer.h"
+#include "io/xdmf_writer.h"
 #include "io/msh_writer.h"
 #include "io/points_io.h"
 #include "io/surface_io.h"
@@ -128,8 +129,7 @@ py::tuple run(py::object surface, const std::string& options_json, py::object pr
     if (!std::filesystem::is_regular_file(job.input, ec))
       throw InputError(job.input, 0, "no such file");
   }
-  const bool has_fe = !job.msh.empty() || !job.inp.empty() || !job.medit.empty() || !job.boundary_vtu.empty() ||
-                      !job.groups.empty() || job.group_options.patch_groups || job.element_order == 2;
+  const bool has_fe = has_solver_outputs(job) || !job.groups.empty() || job.group_options.patch_groups || job.element_order == 2;
   // The job runner turns the boundary-groups stage on for solver outputs; the Python result
   // also carries them when groups (or quadratic elements) are asked for.
   job.fe_groups = has_fe;
@@ -239,7 +239,8 @@ PYBIND11_MODULE(_kdmesh, m) {
       })
       .def("write_inp", [](const PyMesh& p, const std::string& path) { write_inp(p.result.fe, path); })
       .def("write_medit", [](const PyMesh& p, const std::string& path) { write_medit(p.result.fe, path); })
-      .def("write_boundary_vtu", [](const PyMesh& p, const std::string& path) { write_boundary_vtu(p.result.fe, path); });
+      .def("write_boundary_vtu", [](const PyMesh& p, const std::string& path) { write_boundary_vtu(p.result.fe, path); })
+      .def("write_xdmf", [](const PyMesh& p, const std::string& path) { write_xdmf(p.result.fe, path); });
   m.def("run", &run, py::arg("surface"), py::arg("options_json"), py::arg("progress"), py::arg("cancel"));
   m.def("delaunay", &delaunay_tets, py::arg("points"), py::arg("order"), py::arg("threads"), py::arg("seed"));
   m.def("read_surface", [](const std::string& path) {

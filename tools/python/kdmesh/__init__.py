@@ -24,7 +24,8 @@ from . import _kdmesh
 __all__ = [
     "mesh", "delaunay", "read_surface", "write_surface", "Mesh", "Error", "InputError", "SurfaceError",
     "GeometryError", "CheckError", "OutputError", "ResourceError", "UsageError", "CancelledError",
-    "write_vtu", "write_msh", "write_inp", "write_medit", "write_boundary_vtu", "write_nodes", "ORDERS",
+    "write_vtu", "write_msh", "write_inp", "write_medit", "write_boundary_vtu", "write_xdmf", "write_nodes",
+    "ORDERS",
 ]
 
 ORDERS = tuple(_kdmesh.order_names())
@@ -288,3 +289,9 @@ def write_medit(m, path):
 
 def write_boundary_vtu(m, path):
     _fe(m, "write_boundary_vtu").write_boundary_vtu(str(path))
+
+
+def write_xdmf(m, path):
+    """XDMF + HDF5 (the .h5 beside it) for dolfinx: grids "mesh", "cell_tags" (regions) and
+    "facet_tags" (boundary faces, tagged by their first group's position + 1, else 0)."""
+    _fe(m, "write_xdmf").write_xdmf(str(path))
