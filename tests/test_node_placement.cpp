@@ -101,6 +101,20 @@ SizingField uniform(const Model& m, double h) {
   return build_sizing_field(m.surface.mesh, o);
 }
 
+/// h_max far away, `size` at the point `at`, gradation 0.3.
+SizingField point_zone_field(const SurfaceMesh& s, double max_size, double size,
+                             const std::array<double, 3>& at) {
+  SizingOptions o;
+  o.max_size = max_size;
+  o.gradation = 0.3;
+  SizingZone z;
+  z.kind = SizingZone::Kind::point;
+  z.size = size;
+  z.coords = {at[0], at[1], at[2]};
+  o.zones.push_back(z);
+  return build_sizing_field(s, o);
+}
+
 double dist(const double* a, const double* b) {
   return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
 }
@@ -630,15 +644,7 @@ TEST(NodePlacement, GradedFieldDensityFollowsTheField) {
   // boundary layer) must each be within [0.5, 1.7] x the integral of that density, computed
   // independently below.
   const Model m = box(2, 2, 2);
-  SizingOptions so;
-  so.max_size = 0.1;
-  so.gradation = 0.3;
-  SizingZone z;
-  z.kind = SizingZone::Kind::point;
-  z.size = 0.01;
-  z.coords = {1, 1, 1};
-  so.zones.push_back(z);
-  const SizingField h = build_sizing_field(m.surface.mesh, so);
+  const SizingField h = point_zone_field(m.surface.mesh, 0.1, 0.01, {1, 1, 1});
   const SurfaceQuery q(m.surface.mesh);
   const NodeSet ns = place_nodes(m.surface, q, m.features, h);
   const double c = PlacementOptions{}.interior_clearance;
@@ -718,14 +724,7 @@ TEST(SizeFidelity, AwayFromRefinementCountsOnlyEdgesTheFieldLeavesAtTheUsersSize
   }
   SurfaceMesh s;
   s.points = p;
-  SizingOptions o;
-  o.max_size = 1;
-  SizingZone z;
-  z.kind = SizingZone::Kind::point;
-  z.size = 0.1;
-  z.coords = {0, 0, 0};
-  o.zones.push_back(z);
-  const SizingField h = build_sizing_field(s, o);
+  const SizingField h = point_zone_field(s, 1, 0.1, {0, 0, 0});
   const SizeFidelity f = measure_size_fidelity(p, {0, 1, 2, 3, 4, 5, 6, 7}, h);
   EXPECT_EQ(f.edges, 12u);
   EXPECT_EQ(f.away_edges, 6u);
