@@ -12,7 +12,7 @@ namespace kdmesh {
 inline constexpr std::uint32_t kNoFacet = std::numeric_limits<std::uint32_t>::max();
 
 /// A triangle surface: points plus 3 point ids per triangle ("facet").
-/// tris[3f+0..2] are the corners of facet f; for a prepared surface (mesher/surface_prepare.h)
+/// tris[3f+0..2] are the corners of facet f; for a prepared surface (mesher/surface/surface_prepare.h)
 /// every facet is counter-clockwise seen from outside the solid, i.e. its normal
 /// (b-a)x(c-a) points out.
 struct SurfaceMesh {

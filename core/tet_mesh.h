@@ -23,7 +23,7 @@ inline constexpr std::uint32_t kInfiniteVertex = std::numeric_limits<std::uint32
 ///  - adj(t,i) = 4*u + j means: face i of t is face j of tet u ("face reference").
 ///  - Finite tets are positively oriented: det[v1-v0, v2-v0, v3-v0] > 0, i.e. v3 lies on the
 ///    side of plane (v0,v1,v2) that (v1-v0)x(v2-v0) points to; (0, e1, e2, e3) is positive.
-///    This is VTK_TETRA's convention and kdmesh's everywhere (mesher/predicates.h: orient3d).
+///    This is VTK_TETRA's convention and kdmesh's everywhere (mesher/delaunay/predicates.h: orient3d).
 ///  - An infinite tet has exactly one infinite vertex; replacing it by a point far outside the
 ///    hull across its finite face gives a positively oriented tet.
 /// Every tet in the arrays is alive (no holes).

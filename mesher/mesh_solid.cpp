@@ -12,10 +12,10 @@
 
 #include "core/memory_amount.h"
 #include "core/timer.h"
-#include "mesher/node_placement.h"
+#include "mesher/placement/node_placement.h"
 #include "mesher/numeric_ranges.h"
-#include "mesher/surface_prepare.h"
-#include "mesher/surface_query.h"
+#include "mesher/surface/surface_prepare.h"
+#include "mesher/surface/surface_query.h"
 #include "sizing/features.h"
 
 namespace kdmesh {

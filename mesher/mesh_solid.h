@@ -17,17 +17,17 @@
 #include "core/fe_mesh.h"
 #include "core/surface_mesh.h"
 #include "core/tet_mesh.h"
-#include "mesher/boundary_groups.h"
-#include "mesher/fe_assembly.h"
-#include "mesher/mesh_check.h"
-#include "mesher/mesh_improve.h"
-#include "mesher/order.h"
-#include "mesher/quality.h"
+#include "mesher/fe/boundary_groups.h"
+#include "mesher/fe/fe_assembly.h"
+#include "mesher/quality/mesh_check.h"
+#include "mesher/improve/mesh_improve.h"
+#include "mesher/order/order.h"
+#include "mesher/quality/quality.h"
 #include "mesher/resource_estimate.h"
-#include "mesher/size_fidelity.h"
-#include "mesher/surface_repair.h"
-#include "mesher/thickness_sizes.h"
-#include "mesher/volume_mesh.h"
+#include "mesher/quality/size_fidelity.h"
+#include "mesher/surface/surface_repair.h"
+#include "mesher/surface/thickness_sizes.h"
+#include "mesher/volume/volume_mesh.h"
 #include "sizing/sizing_field.h"
 
 namespace kdmesh {
@@ -66,18 +66,18 @@ struct MeshParams {
   double chordal_deviation = -1;
   bool auto_creases = true;
   double thickness_layers = 2;
-  /// The mesh check's tolerances (mesher/mesh_check.h); the sizing aims inside them.
+  /// The mesh check's tolerances (mesher/quality/mesh_check.h); the sizing aims inside them.
   MeshCheckOptions check;
   /// Local refinement: when the boundary cannot be recovered, or the check finds faces too far
   /// from the surface or the volume off, the size is halved around those places and the job
   /// meshed again, at most this many times (and never below sizing.min_size).
   int max_refinements = 8;
-  bool improve = true;         ///< quality improvement after meshing (mesher/mesh_improve.h)
+  bool improve = true;         ///< quality improvement after meshing (mesher/improve/mesh_improve.h)
   /// Boundary groups (patches, feature curves, named groups) and the FE mesh (MeshResult::fe):
   /// what the solver formats need. Off: MeshResult::fe stays empty.
   bool fe_groups = false;
   int element_order = 1;       ///< 1 (tet4) or 2 (tet10, mid-edge nodes on the surface) in fe
-  std::vector<GroupSpec> groups;  ///< named boundary groups (mesher/boundary_groups.h)
+  std::vector<GroupSpec> groups;  ///< named boundary groups (mesher/fe/boundary_groups.h)
   GroupOptions group_options;     ///< automatic patch_<i> / curve_<i> groups
 };
 
@@ -98,7 +98,7 @@ struct MeshCallbacks {
   std::function<bool()> cancel;
 };
 
-/// The boundary groups' verification (mesher/boundary_groups.h), without the per-face arrays.
+/// The boundary groups' verification (mesher/fe/boundary_groups.h), without the per-face arrays.
 struct BoundaryGroupsSummary {
   bool pass = false;
   std::size_t topological_faces = 0, geometric_faces = 0, verified_faces = 0, ambiguous_faces = 0;

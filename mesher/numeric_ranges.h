@@ -4,7 +4,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
 #include "core/surface_mesh.h"
-#include "mesher/quality.h"
+#include "mesher/quality/quality.h"
 #include "mesher/mesh_solid.h"
 
 namespace kdmesh {
@@ -13,7 +13,7 @@ namespace kdmesh {
 // same mesh, every coordinate scaled exactly (ExtremeNumbers.PowerOfTwoScalesGiveTheSameMesh,
 // over the whole range of the length bounds below). Two places were not, up to issue 19: the
 // inside/outside test and the thickness rays, which both built rays from directions of
-// length 1 (mesher/surface_query.cpp: ray_parity::side, SurfaceQuery::ray_distance); that is what lost a 6e15 cube's
+// length 1 (mesher/surface/surface_query.cpp: ray_parity::side, SurfaceQuery::ray_distance); that is what lost a 6e15 cube's
 // corner nodes, and why the former bound of 2^50 on coordinates had been measured. The bounds
 // on lengths below (kMaxLength, kMinLength, kMaxMagnitudePerExtent, kMinSizePerExtent) are
 // derived from the arithmetic, each formula next to its constant.
@@ -22,7 +22,7 @@ namespace kdmesh {
 /// sizes are clamped to it). Two representations meet at 2^120:
 ///  - target sizes are stored per node as float (NodeSet::size): below FLT_MAX ~ 2^128;
 ///  - the highest-degree floating-point expression of the pipeline has degree 8 in lengths:
-///    tet_sine (mesher/improve_quality.h) multiplies the four face-normal lengths |n| <= L^2
+///    tet_sine (mesher/improve/improve_quality.h) multiplies the four face-normal lengths |n| <= L^2
 ///    (and det m, L^3 L^5) of tets whose edges L are at most the bounding-box diagonal
 ///    <= 2 sqrt(3) M. (2 sqrt(3) 2^120)^8 = 2^974.4, 2^49 below DBL_MAX ~ 2^1024 for sums and
 ///    constant factors. The rest is of lower degree (tet_quality 4, volumes 3, CGAL's
@@ -41,14 +41,14 @@ static_assert(kMaxLength < 0x1p128 && kMinLength >= 0x1p-126, "sizes are stored 
 /// each rounds every coordinate to ulp(M)/2 <= 2^-53 M, so a node exactly on the facet in
 /// real numbers measures up to 2 ulp(M) = 2^-51 M off it. The check (and the classification
 /// of flat surface tets) calls a point on the surface within kOnSurfaceDistance x D
-/// (mesher/quality.h), so 2^-51 M <= 1e-9 D: M / D <= 1e-9 x 2^51 = 2.25e6; the power of two
+/// (mesher/quality/quality.h), so 2^-51 M <= 1e-9 D: M / D <= 1e-9 x 2^51 = 2.25e6; the power of two
 /// below is 2^21 = 2.10e6. (The block, D = 173, moved by 1e8 meshes; moved by 1e9,
 /// M / D = 5.8e6, its check found nodes 2 ulp = 2.4e-7 > 1.7e-7 off the surface.)
 constexpr double kMaxMagnitudePerExtent = 0x1p21;
 static_assert(kMaxMagnitudePerExtent * 0x1p-51 <= kOnSurfaceDistance);
 /// Smallest min_size relative to the extent D. The classification takes a tet whose four
 /// vertices are surface nodes for a flat sliver, outside, when its centroid lies within
-/// kOnSurfaceDistance x D of the surface (mesher/volume_mesh.cpp). A tet inside the solid has
+/// kOnSurfaceDistance x D of the surface (mesher/volume/volume_mesh.cpp). A tet inside the solid has
 /// its centroid at least min_i height_i / 4 >= r_in / 2 deep (no face has more than half the
 /// tet's area), r_in = rho R / 3 for radius ratio rho, R >= L_max / 2, and L_max >= 0.7 h
 /// (surface node spacing): depth >= rho 0.7 h / 12. The one choice is the radius ratio to
@@ -63,15 +63,15 @@ constexpr double kMinSizePerExtent = 0x1p-22;
 static_assert(kMinSizePerExtent * 0.7 / (12 * 8) >= kOnSurfaceDistance);
 /// Gradations must be below this, derived from what the field asks of a mesh. The size is
 /// s + g d at distance d from a zone of size s, and a mesh follows it when an edge's length
-/// is the size at its midpoint (mesher/size_fidelity.h). An edge of length L leaving the zone
+/// is the size at its midpoint (mesher/quality/size_fidelity.h). An edge of length L leaving the zone
 /// has the size s + g L / 2 at its midpoint: L = s + g L / 2 has the solution
 /// L = s / (1 - g / 2) only for g < 2. At g >= 2 every such edge is shorter than its size,
 /// whatever its length (the ratio L / (s + g L / 2) stays below 2 / g <= 1), so no mesh follows
 /// the field. Below 2 the work stays bounded by the node count: the surface sweep bisects
 /// only where the size's lower bound over a piece is under half its centre's
-/// (mesher/surface_sampling.cpp), and the spacing grid skips levels of cell size below
+/// (mesher/placement/surface_sampling.cpp), and the spacing grid skips levels of cell size below
 /// h (1 - g beta / 2) / (2 (1 + g beta / 2)), at least h (1 - beta) / (2 (1 + beta)) for
-/// beta < 1 (1/18 of h at the surface's beta 0.8; mesher/spacing_grid.h). (This replaced "at most 2", a chosen bound, issue 19; the sweep's
+/// beta < 1 (1/18 of h at the surface's beta 0.8; mesher/placement/spacing_grid.h). (This replaced "at most 2", a chosen bound, issue 19; the sweep's
 /// former split grew its work as g^2 and took minutes at g = 50.)
 constexpr double kMaxGradation = 2;
 

@@ -6,8 +6,8 @@
 #include <string>
 
 #include "core/memory_amount.h"
-#include "mesher/surface_prepare.h"
-#include "mesher/surface_query.h"
+#include "mesher/surface/surface_prepare.h"
+#include "mesher/surface/surface_query.h"
 #include "sizing/sizing_field.h"
 
 namespace kdmesh {
@@ -22,7 +22,7 @@ struct ResourceEstimate {
   std::uint64_t samples = 0;   ///< sizing-field and inside/outside queries made
 };
 
-/// Nodes per unit area / volume of the placement (mesher/node_placement) where the size is h:
+/// Nodes per unit area / volume of the placement (mesher/placement/node_placement) where the size is h:
 /// 1 / (kSurfaceDensity h^2) and 1 / (kVolumeDensity h^3). Calibrated on the shipped models
 /// at default size (docs/robustness.md, "Memory"): there the node estimate is within 5%; at
 /// the paper sizes it is 13-21% low (finer meshes place relatively more nodes).

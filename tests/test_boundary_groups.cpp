@@ -1,5 +1,5 @@
-// kdmesh — tests of surface patches, boundary groups and FE assembly (mesher/boundary_groups.h,
-// mesher/fe_assembly.h) on a cube and a finely faceted cylinder meshed by the real pipeline.
+// kdmesh — tests of surface patches, boundary groups and FE assembly (mesher/fe/boundary_groups.h,
+// mesher/fe/fe_assembly.h) on a cube and a finely faceted cylinder meshed by the real pipeline.
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <gtest/gtest.h>
 
@@ -10,12 +10,12 @@
 #include <set>
 
 #include "core/error.h"
-#include "mesher/boundary_groups.h"
-#include "mesher/fe_assembly.h"
-#include "mesher/mesh_check.h"
-#include "mesher/node_placement.h"
-#include "mesher/surface_prepare.h"
-#include "mesher/volume_mesh.h"
+#include "mesher/fe/boundary_groups.h"
+#include "mesher/fe/fe_assembly.h"
+#include "mesher/quality/mesh_check.h"
+#include "mesher/placement/node_placement.h"
+#include "mesher/surface/surface_prepare.h"
+#include "mesher/volume/volume_mesh.h"
 #include "sizing/features.h"
 
 namespace kdmesh {

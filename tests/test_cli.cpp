@@ -139,7 +139,7 @@ TEST(Cli, CgalCountsOnAPointFileMatchTheKernelsConflicts) {
   const auto c = nlohmann::json::parse(cg.out)["counts"], k = nlohmann::json::parse(kd.out)["counts"];
   EXPECT_EQ(c["conflicts_per_point"].get<double>(), k["conflicts_per_point"].get<double>());
   // Location with the same hints: CGAL's walk tries faces in random order, kdmesh's in the
-  // order of a direction heuristic (mesher/delaunay.cpp, locate), which needs fewer tests.
+  // order of a direction heuristic (mesher/delaunay/delaunay.cpp, locate), which needs fewer tests.
   EXPECT_LT(k["orient_tests_per_point"].get<double>(), c["orient_tests_per_point"].get<double>());
   EXPECT_GT(k["orient_tests_per_point"].get<double>(), 0.5 * c["orient_tests_per_point"].get<double>());
   EXPECT_GE(c["all_orient_tests_per_point"].get<double>(), c["orient_tests_per_point"].get<double>());

@@ -20,7 +20,7 @@
 
 #include "core/fe_mesh.h"
 #include "io/msh_reader.h"
-#include "mesher/fe_assembly.h"
+#include "mesher/fe/fe_assembly.h"
 #include "tests/support/clients.h"
 #include "tests/support/run_cli.h"
 

@@ -9,11 +9,11 @@
 
 #include "core/error.h"
 #include "core/rng.h"
-#include "mesher/delaunay.h"
-#include "mesher/delaunay_check.h"
-#include "mesher/order.h"
-#include "mesher/reference_delaunay.h"
-#include "mesher/tet_compare.h"
+#include "mesher/delaunay/delaunay.h"
+#include "mesher/reference/delaunay_check.h"
+#include "mesher/order/order.h"
+#include "mesher/reference/reference_delaunay.h"
+#include "mesher/reference/tet_compare.h"
 #include "tests/support/walk_histogram.h"
 #include "tools/lib/distributions.h"
 #include "tests/support/tetgen.h"
@@ -260,7 +260,7 @@ TEST(Delaunay, RegressionTetgenAndVolumeAtScale1e200) {
 }
 
 // The walk tries a tet's faces in the order of a direction heuristic (locate() in
-// mesher/delaunay.cpp). On kd-bfs cube points it needs about 8 orientation tests per point,
+// mesher/delaunay/delaunay.cpp). On kd-bfs cube points it needs about 8 orientation tests per point,
 // where the walk with a random first face needed 11.7 (docs/bench/README.md, measured before
 // the change at 100k-1M points, also what CGAL's walk needs with the same hints): the bound
 // between the two catches a return to unordered faces.

@@ -7,10 +7,10 @@
 #include <string>
 
 #include "core/error.h"
-#include "mesher/delaunay.h"
-#include "mesher/delaunay_check.h"
-#include "mesher/order.h"
-#include "mesher/tet_compare.h"
+#include "mesher/delaunay/delaunay.h"
+#include "mesher/reference/delaunay_check.h"
+#include "mesher/order/order.h"
+#include "mesher/reference/tet_compare.h"
 #include "tests/support/walk_histogram.h"
 #include "tools/lib/distributions.h"
 

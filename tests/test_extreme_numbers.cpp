@@ -21,7 +21,7 @@
 #include "tests/support/run_cli.h"
 #include "tools/lib/mesh_job.h"
 #include "mesher/numeric_ranges.h"
-#include "mesher/reference_delaunay.h"
+#include "mesher/reference/reference_delaunay.h"
 
 namespace {
 
@@ -290,7 +290,7 @@ TEST(ExtremeNumbers, SweepGivesCorrectMeshOrClearError) {
 // Issue 19: a cube scaled by 6e15 and meshed at its coarsest sizes lost corner nodes (or all
 // its tets: "no tetrahedron of the 8 nodes lies inside the solid"), so coordinates had been
 // bounded at 2^50. The cause was the inside/outside test's rays of unit length, whose
-// direction rounds away at coordinates of 2^52 (mesher/surface_query.cpp, ray_parity::side). The cube now keeps its
+// direction rounds away at coordinates of 2^52 (mesher/surface/surface_query.cpp, ray_parity::side). The cube now keeps its
 // corners and its volume at the reported scales and in every fourth binade up to kMaxLength.
 TEST(ExtremeNumbers, LargeScaleKeepsCornerNodes) {
   std::vector<double> scales = {6e15, 1e16};

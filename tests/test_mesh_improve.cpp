@@ -1,4 +1,4 @@
-// kdmesh — tests of the mesh quality-improvement pass (mesher/mesh_improve.h) and of its
+// kdmesh — tests of the mesh quality-improvement pass (mesher/improve/mesh_improve.h) and of its
 // parts: the flat tet structure (improve_tets), the flips (improve_flips), the objective
 // (improve_quality) and smoothing (improve_smooth), on hand-built configurations and on small
 // meshes made by the pipeline's own stages.
@@ -13,20 +13,20 @@
 #include <string>
 
 #include "core/rng.h"
-#include "mesher/improve_boundary.h"
-#include "mesher/improve_flips.h"
-#include "mesher/improve_insert.h"
-#include "mesher/improve_quality.h"
-#include "mesher/improve_smooth.h"
-#include "mesher/improve_split_boundary.h"
-#include "mesher/improve_tets.h"
-#include "mesher/mesh_check.h"
-#include "mesher/mesh_improve.h"
-#include "mesher/node_placement.h"
-#include "mesher/predicates.h"
-#include "mesher/quality.h"
-#include "mesher/surface_prepare.h"
-#include "mesher/volume_mesh.h"
+#include "mesher/improve/improve_boundary.h"
+#include "mesher/improve/improve_flips.h"
+#include "mesher/improve/improve_insert.h"
+#include "mesher/improve/improve_quality.h"
+#include "mesher/improve/improve_smooth.h"
+#include "mesher/improve/improve_split_boundary.h"
+#include "mesher/improve/improve_tets.h"
+#include "mesher/quality/mesh_check.h"
+#include "mesher/improve/mesh_improve.h"
+#include "mesher/placement/node_placement.h"
+#include "mesher/delaunay/predicates.h"
+#include "mesher/quality/quality.h"
+#include "mesher/surface/surface_prepare.h"
+#include "mesher/volume/volume_mesh.h"
 #include "sizing/features.h"
 
 namespace kdmesh {
@@ -235,7 +235,7 @@ TEST(ImproveTets, RemovingATetMayOrphanOnlyTheVertexAllowed) {
 }
 
 // A boundary edge's open ring, and splitting the edge through a new node (the boundary-edge
-// split of the quality pass, mesher/improve_split.h): two tets (a, b, c, p) and (a, b, p, d)
+// split of the quality pass, mesher/improve/improve_split.h): two tets (a, b, c, p) and (a, b, p, d)
 // around the edge ab, whose boundary faces at ab are (a, b, c) and (a, b, d). A replace that
 // drops those two faces and creates four new ones is refused unless the boundary may change.
 TEST(ImproveTets, OpenEdgeRingAndABoundaryChangingReplace) {

@@ -14,7 +14,7 @@
 #include "io/surface_io.h"
 #include "io/vtu_writer.h"
 #include "mesher/mesh_solid.h"
-#include "mesher/surface_prepare.h"
+#include "mesher/surface/surface_prepare.h"
 #include "tools/lib/mesh_job.h"
 
 namespace kdmesh {

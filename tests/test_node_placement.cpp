@@ -13,12 +13,12 @@
 #include <vector>
 
 #include "core/error.h"
-#include "mesher/edge_sampling.h"
-#include "mesher/interior_fill.h"
-#include "mesher/node_placement.h"
-#include "mesher/size_fidelity.h"
-#include "mesher/spacing_grid.h"
-#include "mesher/surface_sampling.h"
+#include "mesher/placement/edge_sampling.h"
+#include "mesher/placement/interior_fill.h"
+#include "mesher/placement/node_placement.h"
+#include "mesher/quality/size_fidelity.h"
+#include "mesher/placement/spacing_grid.h"
+#include "mesher/placement/surface_sampling.h"
 
 namespace kdmesh {
 namespace {

@@ -18,8 +18,8 @@
 
 #include "core/error.h"
 #include "core/rng.h"
-#include "mesher/hilbert.h"
-#include "mesher/order.h"
+#include "mesher/order/hilbert.h"
+#include "mesher/order/order.h"
 #include "tools/lib/distributions.h"
 
 namespace kdmesh {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "core/rng.h"
-#include "mesher/predicates.h"
+#include "mesher/delaunay/predicates.h"
 
 namespace kdmesh {
 namespace {

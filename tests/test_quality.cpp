@@ -1,11 +1,11 @@
-// kdmesh — tests of the tetrahedron shape measures (mesher/quality.h).
+// kdmesh — tests of the tetrahedron shape measures (mesher/quality/quality.h).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <gtest/gtest.h>
 
 #include <array>
 #include <cmath>
 
-#include "mesher/quality.h"
+#include "mesher/quality/quality.h"
 
 namespace kdmesh {
 namespace {

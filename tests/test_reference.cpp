@@ -15,8 +15,8 @@
 #include "core/ordering.h"
 #include "core/point_set.h"
 #include "core/rng.h"
-#include "mesher/reference_delaunay.h"
-#include "mesher/tet_compare.h"
+#include "mesher/reference/reference_delaunay.h"
+#include "mesher/reference/tet_compare.h"
 #include "tests/support/tetgen.h"
 
 namespace kdmesh {

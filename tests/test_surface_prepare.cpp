@@ -1,4 +1,4 @@
-// kdmesh — tests of surface validation and orientation (mesher/surface_prepare.h).
+// kdmesh — tests of surface validation and orientation (mesher/surface/surface_prepare.h).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <gtest/gtest.h>
 
@@ -15,7 +15,7 @@
 
 #include "core/error.h"
 #include "io/surface_io.h"
-#include "mesher/surface_prepare.h"
+#include "mesher/surface/surface_prepare.h"
 #include "tests/support/scratch.h"
 
 namespace kdmesh {

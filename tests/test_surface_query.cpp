@@ -1,4 +1,4 @@
-// kdmesh — tests of SurfaceQuery (mesher/surface_query.h): the side of a point and the
+// kdmesh — tests of SurfaceQuery (mesher/surface/surface_query.h): the side of a point and the
 // facet-box certificate that carries a known side along a short segment.
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <gtest/gtest.h>
@@ -11,7 +11,7 @@
 #include <utility>
 
 #include "core/rng.h"
-#include "mesher/surface_query.h"
+#include "mesher/surface/surface_query.h"
 
 namespace kdmesh {
 namespace {

@@ -1,4 +1,4 @@
-// kdmesh — tests of the opt-in surface repairs (mesher/surface_repair.h): each defect is
+// kdmesh — tests of the opt-in surface repairs (mesher/surface/surface_repair.h): each defect is
 // refused without its repair, fixed with it (the repaired surface validates and encloses the
 // same volume), and reported; unsafe cases are left for validation to refuse.
 // SPDX-License-Identifier: AGPL-3.0-or-later
@@ -8,8 +8,8 @@
 
 #include "core/error.h"
 #include "io/surface_io.h"
-#include "mesher/surface_prepare.h"
-#include "mesher/surface_repair.h"
+#include "mesher/surface/surface_prepare.h"
+#include "mesher/surface/surface_repair.h"
 #include "tests/support/scratch.h"
 #include "tools/lib/mesh_job.h"
 

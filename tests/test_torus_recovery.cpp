@@ -1,5 +1,5 @@
 // kdmesh — regression tests of the bug "kdmesh cannot mesh a torus (boundary recovery fails)":
-// folds of all-surface tets on doubly curved and rough surfaces (mesher/volume_mesh.cpp).
+// folds of all-surface tets on doubly curved and rough surfaces (mesher/volume/volume_mesh.cpp).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 //
 // Before the fix, mesh_volume refused every torus: the tets whose four vertices are surface
@@ -13,11 +13,11 @@
 #include <cmath>
 #include <string>
 
-#include "mesher/boundary_faces.h"
-#include "mesher/mesh_check.h"
-#include "mesher/node_placement.h"
-#include "mesher/surface_prepare.h"
-#include "mesher/volume_mesh.h"
+#include "mesher/volume/boundary_faces.h"
+#include "mesher/quality/mesh_check.h"
+#include "mesher/placement/node_placement.h"
+#include "mesher/surface/surface_prepare.h"
+#include "mesher/volume/volume_mesh.h"
 #include "sizing/features.h"
 #include "tests/support/torus.h"
 

@@ -1,5 +1,5 @@
-// kdmesh — tests of the volume mesher (mesher/volume_mesh.h) and of its independent checker
-// (mesher/mesh_check.h), on solids made of unit voxels with hand-built node sets.
+// kdmesh — tests of the volume mesher (mesher/volume/volume_mesh.h) and of its independent checker
+// (mesher/quality/mesh_check.h), on solids made of unit voxels with hand-built node sets.
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <gtest/gtest.h>
 
@@ -12,13 +12,13 @@
 
 #include "core/error.h"
 #include "core/rng.h"
-#include "mesher/boundary_faces.h"
-#include "mesher/mesh_improve.h"
-#include "mesher/mesh_check.h"
-#include "mesher/node_placement.h"
-#include "mesher/predicates.h"
-#include "mesher/quality.h"
-#include "mesher/volume_mesh.h"
+#include "mesher/volume/boundary_faces.h"
+#include "mesher/improve/mesh_improve.h"
+#include "mesher/quality/mesh_check.h"
+#include "mesher/placement/node_placement.h"
+#include "mesher/delaunay/predicates.h"
+#include "mesher/quality/quality.h"
+#include "mesher/volume/volume_mesh.h"
 #include "tests/support/icosphere.h"
 
 namespace kdmesh {

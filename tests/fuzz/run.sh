@@ -22,7 +22,7 @@ CORE=(core/*.cpp)
 IO_READERS="$(ls io/*.cpp | grep -v 'vtu_writer\|xdmf_writer' | tr '\n' ' ')"
 IO_POINTS="$IO_READERS"
 IO_SURFACE="$IO_READERS"
-ORDERS="$(ls mesher/order*.cpp | tr '\n' ' ')"
+ORDERS="$(ls mesher/order/order*.cpp | tr '\n' ' ')"
 
 # target : sources (besides the target file and core) : libraries
 declare -A SOURCES=(
@@ -43,9 +43,9 @@ declare -A LIBS=(
 # The solver-format readers (round trips of the writers).
 [ -f tests/fuzz/fuzz_msh.cpp ] && SOURCES[msh]="$IO_READERS" && LIBS[msh]=""
 [ -f tests/fuzz/fuzz_medit.cpp ] && SOURCES[medit]="$IO_READERS" && LIBS[medit]=""
-# (mesher/tetgen_delaunay.cpp without KDMESH_WITH_TETGEN is only tetgen_available() and its
+# (mesher/reference/tetgen_delaunay.cpp without KDMESH_WITH_TETGEN is only tetgen_available() and its
 # message, which job_config asks for `check: [tetgen]`: no TetGen, no CGAL here.)
-[ -f tests/fuzz/fuzz_config.cpp ] && SOURCES[config]="tools/lib/job_config.cpp tools/lib/job_paths.cpp io/file_io.cpp $ORDERS mesher/tetgen_delaunay.cpp" && LIBS[config]="-lyaml-cpp -lpthread"
+[ -f tests/fuzz/fuzz_config.cpp ] && SOURCES[config]="tools/lib/job_config.cpp tools/lib/job_paths.cpp io/file_io.cpp $ORDERS mesher/reference/tetgen_delaunay.cpp" && LIBS[config]="-lyaml-cpp -lpthread"
 
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=($(printf '%s\n' "${!SOURCES[@]}" | sort))

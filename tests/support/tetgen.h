@@ -3,7 +3,7 @@
 #pragma once
 #include <gtest/gtest.h>
 
-#include "mesher/reference_delaunay.h"
+#include "mesher/reference/reference_delaunay.h"
 
 /// First statement of a test that runs TetGen (in-process or through the kdmesh executable,
 /// which is the same build): skipped, with the reason, when this kdmesh has no TetGen.

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "mesher/delaunay.h"
+#include "mesher/delaunay/delaunay.h"
 
 namespace kdmesh::test {
 

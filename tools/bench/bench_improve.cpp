@@ -1,4 +1,4 @@
-// kdmesh — benchmark of the mesh quality-improvement pass (mesher/mesh_improve.h) on a job
+// kdmesh — benchmark of the mesh quality-improvement pass (mesher/improve/mesh_improve.h) on a job
 // of a batch file. Runs the pipeline's stages up to mesh_volume as `kdmesh mesh` does (read,
 // prepare, sharp features, sizing, node placement, volume mesh), then improve_mesh, then the
 // mesh check and the quality summary, and prints after each stage of the pass: min/max
@@ -18,12 +18,12 @@
 
 #include "core/timer.h"
 #include "io/surface_io.h"
-#include "mesher/mesh_check.h"
-#include "mesher/mesh_improve.h"
-#include "mesher/node_placement.h"
-#include "mesher/quality.h"
-#include "mesher/surface_prepare.h"
-#include "mesher/volume_mesh.h"
+#include "mesher/quality/mesh_check.h"
+#include "mesher/improve/mesh_improve.h"
+#include "mesher/placement/node_placement.h"
+#include "mesher/quality/quality.h"
+#include "mesher/surface/surface_prepare.h"
+#include "mesher/volume/volume_mesh.h"
 #include "sizing/features.h"
 #include "tools/lib/job_config.h"
 

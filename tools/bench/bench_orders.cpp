@@ -9,7 +9,7 @@
 #include <string>
 
 #include "core/point_set.h"
-#include "mesher/order.h"
+#include "mesher/order/order.h"
 #include "tools/lib/distributions.h"
 
 namespace kdmesh {

@@ -17,11 +17,11 @@
 #include <vector>
 
 #include "core/timer.h"
-#include "mesher/mesh_check.h"
-#include "mesher/node_placement.h"
-#include "mesher/size_fidelity.h"
-#include "mesher/surface_prepare.h"
-#include "mesher/volume_mesh.h"
+#include "mesher/quality/mesh_check.h"
+#include "mesher/placement/node_placement.h"
+#include "mesher/quality/size_fidelity.h"
+#include "mesher/surface/surface_prepare.h"
+#include "mesher/volume/volume_mesh.h"
 #include "sizing/features.h"
 
 namespace kdmesh {

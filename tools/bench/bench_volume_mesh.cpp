@@ -11,8 +11,8 @@
 
 #include "core/rng.h"
 #include "core/timer.h"
-#include "mesher/mesh_check.h"
-#include "mesher/volume_mesh.h"
+#include "mesher/quality/mesh_check.h"
+#include "mesher/volume/volume_mesh.h"
 
 using namespace kdmesh;
 

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "core/error.h"
-#include "mesher/reference_delaunay.h"
+#include "mesher/reference/reference_delaunay.h"
 #include "tools/kdmesh/cli.h"
 #include "tools/kdmesh/mesh_options.h"
 #include "tools/lib/job_config.h"

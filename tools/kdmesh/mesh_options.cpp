@@ -10,9 +10,9 @@
 
 #include "core/error.h"
 #include "core/memory_amount.h"
-#include "mesher/order.h"
-#include "mesher/reference_delaunay.h"
-#include "mesher/surface_repair.h"
+#include "mesher/order/order.h"
+#include "mesher/reference/reference_delaunay.h"
+#include "mesher/surface/surface_repair.h"
 
 namespace kdmesh::cli {
 

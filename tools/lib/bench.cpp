@@ -6,7 +6,7 @@
 // (ru_maxrss from wait4) is that run's alone, and a run that exceeds --timeout can be killed.
 // The child generates its points from (dist, n, seed) (not timed) instead of reading a file.
 // CGAL runs get a second child with the counting traits (CgalOptions::count) for Tables 8-14;
-// its time is not reported (counting changes CGAL's walk, see mesher/reference_delaunay.h).
+// its time is not reported (counting changes CGAL's walk, see mesher/reference/reference_delaunay.h).
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -21,9 +21,9 @@
 
 #include "core/error.h"
 #include "core/timer.h"
-#include "mesher/delaunay.h"
-#include "mesher/order.h"
-#include "mesher/reference_delaunay.h"
+#include "mesher/delaunay/delaunay.h"
+#include "mesher/order/order.h"
+#include "mesher/reference/reference_delaunay.h"
 #include "tools/lib/bench.h"
 #include "tools/lib/distributions.h"
 

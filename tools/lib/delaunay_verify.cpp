@@ -10,11 +10,11 @@
 
 #include "core/error.h"
 #include "core/timer.h"
-#include "mesher/delaunay.h"
-#include "mesher/delaunay_check.h"
-#include "mesher/order.h"
-#include "mesher/reference_delaunay.h"
-#include "mesher/tet_compare.h"
+#include "mesher/delaunay/delaunay.h"
+#include "mesher/reference/delaunay_check.h"
+#include "mesher/order/order.h"
+#include "mesher/reference/reference_delaunay.h"
+#include "mesher/reference/tet_compare.h"
 
 namespace kdmesh {
 

@@ -19,8 +19,8 @@
 #include "core/memory_amount.h"
 #include "io/file_io.h"
 #include "io/surface_io.h"
-#include "mesher/reference_delaunay.h"
-#include "mesher/surface_repair.h"
+#include "mesher/reference/reference_delaunay.h"
+#include "mesher/surface/surface_repair.h"
 #include "tools/lib/job_paths.h"
 
 namespace kdmesh {

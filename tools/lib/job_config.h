@@ -42,7 +42,7 @@ namespace kdmesh {
 ///                  (default 0.005, relative)}: the mesh check's tolerances
 ///     max_refinements optional integer in [0, 64] (default 8): local refinements (size halved
 ///                  where the boundary is not recovered or not within tolerance) before failing
-///     order        optional order name (mesher/order.h: kd-bfs-hilbert, kd-bfs, kd-bfs-alt,
+///     order        optional order name (mesher/order/order.h: kd-bfs-hilbert, kd-bfs, kd-bfs-alt,
 ///                  kd-local, hilbert, brio, random, input; default kd-bfs-hilbert)
 ///     seed         optional unsigned integer (default 1)
 ///     check        optional list of: tetgen, delaunay

@@ -3,7 +3,7 @@
 //
 // Why TetGen runs in a forked child through its library, not the Debian `tetgen` program on
 // files: TetGen 1.5's error exit frees its memory and throws, after which its destructor frees
-// it again, so the process that called it crashes (mesher/tetgen_delaunay.cpp). A child
+// it again, so the process that called it crashes (mesher/reference/tetgen_delaunay.cpp). A child
 // process contains that, like the program would, but without writing and parsing .poly /
 // .b.node / .b.ele / .b.mtr / .node / .ele files: the time measured is tetrahedralize()'s own
 // (no file I/O on either side), the same libtet that --check uses is compared, and the PLC
@@ -48,14 +48,14 @@
 #include "io/medit_reader.h"
 #include "io/surface_io.h"
 #include "io/vtu_writer.h"
-#include "mesher/delaunay.h"
-#include "mesher/order.h"
-#include "mesher/predicates.h"
-#include "mesher/quality.h"
-#include "mesher/reference_delaunay.h"
-#include "mesher/size_fidelity.h"
-#include "mesher/surface_query.h"
-#include "mesher/surface_repair.h"
+#include "mesher/delaunay/delaunay.h"
+#include "mesher/order/order.h"
+#include "mesher/delaunay/predicates.h"
+#include "mesher/quality/quality.h"
+#include "mesher/reference/reference_delaunay.h"
+#include "mesher/quality/size_fidelity.h"
+#include "mesher/surface/surface_query.h"
+#include "mesher/surface/surface_repair.h"
 
 namespace kdmesh {
 

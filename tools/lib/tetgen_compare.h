@@ -12,7 +12,7 @@
 #include "core/error.h"
 #include "core/point_set.h"
 #include "core/tet_mesh.h"
-#include "mesher/surface_prepare.h"
+#include "mesher/surface/surface_prepare.h"
 #include "sizing/sizing_field.h"
 #include "tools/lib/mesh_job.h"
 
@@ -79,7 +79,7 @@ struct BackgroundMesh {
 /// (cells of each level l tile space). spacing <= 0: all nodes. Deterministic.
 PointSet thin_nodes(const PointSet& nodes, const SizingField& sizing, double spacing);
 
-/// The Delaunay tetrahedralization (mesher/delaunay.h) of thin_nodes(nodes, sizing, spacing)
+/// The Delaunay tetrahedralization (mesher/delaunay/delaunay.h) of thin_nodes(nodes, sizing, spacing)
 /// together with every point of `surface` (so that it covers the whole solid: TetGen leaves
 /// points outside its background mesh without a size), exact duplicates merged, with
 /// size = sizing(x) at every point. Throws GeometryError if the points span no volume.
@@ -108,7 +108,7 @@ struct TetgenRun {
 };
 
 /// Meshes the surface with TetGen 1.5 (library) in a forked child process: TetGen's error exit
-/// crashes the process that calls it (see mesher/tetgen_delaunay.cpp), and a PLC TetGen
+/// crashes the process that calls it (see mesher/reference/tetgen_delaunay.cpp), and a PLC TetGen
 /// rejects (self-intersections, close facets, ...) must fail only the comparison.
 /// `holes`: points in the voids (void_hole_points); `background`: required iff `switches`
 /// contain m. Throws CheckError when TetGen reports an error (its code and the tail of its
@@ -119,10 +119,10 @@ TetgenRun run_tetgen(const PreparedSurface& surface, const PointSet& holes,
                      double timeout_seconds = 0);
 
 /// The comparison's measures of one mesh, the same for both sides:
-///   nodes (points used by a tet), tets, quality (mesher/quality.h summarize_quality: tets,
+///   nodes (points used by a tet), tets, quality (mesher/quality/quality.h summarize_quality: tets,
 ///   inverted, min/max dihedral, mean/min radius ratio, max radius-edge, volume-length),
 ///   min_dihedral_below {"5", "10", "12"} (tets whose smallest dihedral is below, degrees),
-///   volume {mesh, solid, relative_error}, size_fidelity (mesher/size_fidelity.h against
+///   volume {mesh, solid, relative_error}, size_fidelity (mesher/quality/size_fidelity.h against
 ///   `sizing`: edges, mean_ratio, fraction_in_range [0.7, 1.4], min_ratio, max_ratio).
 nlohmann::json measure_mesh(const TetMesh& mesh, const SizingField& sizing, double solid_volume);
 

@@ -25,9 +25,9 @@
 #include "io/points_io.h"
 #include "io/surface_io.h"
 #include "io/vtu_writer.h"
-#include "mesher/delaunay.h"
-#include "mesher/order.h"
-#include "mesher/surface_prepare.h"
+#include "mesher/delaunay/delaunay.h"
+#include "mesher/order/order.h"
+#include "mesher/surface/surface_prepare.h"
 #include "tools/lib/job_config.h"
 #include "tools/lib/mesh_job.h"
 

@@ -1,0 +1,435 @@
+// kdmesh — the mutable tet structure of the quality-improvement pass (mesher/improve/improve_tets.h).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/improve/improve_tets.h"
+
+#include <algorithm>
+#include <array>
+#include <string>
+
+#include "core/error.h"
+#include "mesher/parallel_for.h"
+#include "mesher/volume/volume_mesh.h"
+
+namespace kdmesh {
+
+namespace {
+
+using Key = std::array<std::uint32_t, 3>;
+
+Key sorted_key(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+  if (a > b) std::swap(a, b);
+  if (b > c) std::swap(b, c);
+  if (a > b) std::swap(a, b);
+  return {a, b, c};
+}
+
+Key face_key(const std::uint32_t* v, int i) {
+  return sorted_key(v[kTetFace[i][0]], v[kTetFace[i][1]], v[kTetFace[i][2]]);
+}
+
+}  // namespace
+
+ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
+                         const std::vector<std::uint32_t>& region)
+    : nodes_(&nodes) {
+  const std::size_t nt = tets.size() / 4, np = nodes.size_count();
+  for (std::size_t i = 0; i < 4 * nt; ++i)
+    if (tets[i] >= np)
+      throw UsageError("improve_mesh: tet " + std::to_string(i / 4) + " references node " +
+                       std::to_string(tets[i]) + " of " + std::to_string(np));
+  // Slots in the order of each tet's smallest vertex id (a counting sort; stable): the tets
+  // around a vertex then lie close together in memory when nearby nodes have nearby ids,
+  // which the passes' star walks (and the input order, in insertion order) need.
+  {
+    std::vector<std::uint32_t> count(np + 1, 0), order(nt);
+    auto min_of = [&](std::size_t t) {
+      return std::min(std::min(tets[4 * t], tets[4 * t + 1]), std::min(tets[4 * t + 2], tets[4 * t + 3]));
+    };
+    for (std::size_t t = 0; t < nt; ++t) ++count[min_of(t) + 1];
+    for (std::size_t k = 0; k < np; ++k) count[k + 1] += count[k];
+    for (std::size_t t = 0; t < nt; ++t) order[count[min_of(t)]++] = std::uint32_t(t);
+    tv_.resize(4 * nt);
+    region_.assign(nt, 0);
+    for (std::size_t s = 0; s < nt; ++s) {
+      std::copy_n(&tets[4 * std::size_t(order[s])], 4, &tv_[4 * s]);
+      if (order[s] < region.size()) region_[s] = region[order[s]];
+    }
+  }
+  ta_.assign(4 * nt, kImproveNone);
+  version_.assign(nt, 0);
+  vtet_.assign(np, kImproveNone);
+  mark_.assign(nt, 0);
+  inside_known_.assign(nt, 0);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int i = 0; i < 4; ++i) vtet_[tv_[4 * t + i]] = std::uint32_t(t);
+  // Faces bucketed by their smallest vertex (counting sort), each bucket sorted by the two
+  // other vertices, equal neighbours matched.
+  struct Rec {
+    std::uint32_t b, c, ref;
+  };
+  std::vector<std::uint32_t> start(np + 1, 0);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int i = 0; i < 4; ++i) ++start[face_key(&tv_[4 * t], i)[0] + 1];
+  for (std::size_t k = 0; k < np; ++k) start[k + 1] += start[k];
+  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+  std::vector<Rec> faces(4 * nt);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int i = 0; i < 4; ++i) {
+      const Key k = face_key(&tv_[4 * t], i);
+      faces[fill[k[0]]++] = {k[1], k[2], std::uint32_t(4 * t + i)};
+    }
+  std::vector<std::uint8_t> overfull(np, 0);
+  parallel_for(np, [&](std::size_t kb, std::size_t ke, unsigned) {
+  for (std::size_t k = kb; k < ke; ++k) {
+    Rec* b = faces.data() + start[k];
+    Rec* e = faces.data() + start[k + 1];
+    std::sort(b, e, [](const Rec& x, const Rec& y) {
+      return x.b != y.b ? x.b < y.b : x.c != y.c ? x.c < y.c : x.ref < y.ref;
+    });
+    for (Rec* x = b; x < e;) {
+      Rec* y = x + 1;
+      while (y < e && y->b == x->b && y->c == x->c) ++y;
+      if (y - x > 2) overfull[k] = 1;
+      if (y - x == 2) {
+        ta_[x->ref] = x[1].ref;
+        ta_[x[1].ref] = x->ref;
+      }
+      x = y;
+    }
+  }
+  }, 4096);
+  for (std::size_t k = 0; k < np; ++k)
+    if (overfull[k])
+      throw CheckError("improve_mesh: a face at node " + std::to_string(k) +
+                       " is shared by more than two tets");
+}
+
+std::uint32_t ImproveTets::new_slot() {
+  if (!free_.empty()) {
+    const std::uint32_t t = free_.back();
+    free_.pop_back();
+    inside_known_[t] = 0;
+    return t;
+  }
+  const std::uint32_t t = std::uint32_t(tv_.size() / 4);
+  tv_.insert(tv_.end(), 4, kImproveNone);
+  ta_.insert(ta_.end(), 4, kImproveNone);
+  region_.push_back(0);
+  version_.push_back(0);
+  mark_.push_back(0);
+  inside_known_.push_back(0);
+  return t;
+}
+
+void ImproveTets::link_face(std::uint32_t t, int i, std::uint32_t ref) {
+  ta_[4 * std::size_t(t) + i] = ref;
+  if (ref != kImproveNone) ta_[ref] = 4 * t + std::uint32_t(i);
+}
+
+bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
+                          const std::vector<std::uint32_t>& fresh,
+                          std::vector<std::uint32_t>* created, bool boundary_may_change) {
+  if (++mark_stamp_ == 0) {
+    std::fill(mark_.begin(), mark_.end(), 0);
+    mark_stamp_ = 1;
+  }
+  for (std::uint32_t t : old) mark_[t] = mark_stamp_;
+  // Entries: the cavity's outer faces (source = the face reference across, or kImproveNone
+  // for a boundary face; tag 0) and the new tets' faces (source = 4*k+i; tag 1).
+  struct Entry {
+    Key key;
+    std::uint32_t src;
+    std::uint8_t is_new;
+  };
+  static thread_local std::vector<Entry> e;
+  e.clear();
+  for (std::uint32_t t : old)
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t r = ta_[4 * std::size_t(t) + i];
+      if (r != kImproveNone && mark_[r >> 2] == mark_stamp_) continue;
+      e.push_back({face_key(&tv_[4 * std::size_t(t)], i), r, 0});
+    }
+  const std::size_t nn = fresh.size() / 4;
+  for (std::size_t k = 0; k < nn; ++k)
+    for (int i = 0; i < 4; ++i) e.push_back({face_key(&fresh[4 * k], i), std::uint32_t(4 * k + i), 1});
+  std::sort(e.begin(), e.end(), [](const Entry& a, const Entry& b) {
+    return a.key != b.key ? a.key < b.key : a.is_new < b.is_new;
+  });
+  // Every key exactly twice, at least one of the two new; with boundary_may_change, a key
+  // once: a new face (listed as a pair with itself: it becomes a boundary face), or a
+  // boundary face of the cavity (left out: it goes away).
+  static thread_local std::vector<Entry> pairs;
+  pairs.clear();
+  for (std::size_t x = 0; x < e.size();) {
+    if (x + 1 < e.size() && e[x].key == e[x + 1].key) {
+      if (!e[x + 1].is_new || (x + 2 < e.size() && e[x + 2].key == e[x].key)) return false;
+      pairs.push_back(e[x]);
+      pairs.push_back(e[x + 1]);
+      x += 2;
+      continue;
+    }
+    if (!boundary_may_change || (!e[x].is_new && e[x].src != kImproveNone)) return false;
+    if (e[x].is_new) pairs.push_back(e[x]), pairs.push_back(e[x]);
+    ++x;
+  }
+  e.swap(pairs);
+
+  std::vector<std::uint32_t> slot(nn);
+  for (std::uint32_t t : old) {
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t w = tv_[4 * std::size_t(t) + i];
+      if (vtet_[w] == t) vtet_[w] = kImproveNone;
+    }
+    tv_[4 * std::size_t(t)] = kImproveNone;
+    free_.push_back(t);
+  }
+  const std::uint32_t reg = old.empty() ? 0 : region_[old[0]];
+  for (std::size_t k = 0; k < nn; ++k) {
+    const std::uint32_t t = new_slot();
+    slot[k] = t;
+    for (int i = 0; i < 4; ++i) {
+      tv_[4 * std::size_t(t) + i] = fresh[4 * k + i];
+      ta_[4 * std::size_t(t) + i] = kImproveNone;
+      vtet_[fresh[4 * k + i]] = t;
+    }
+    region_[t] = reg;
+    ++version_[t];
+  }
+  for (std::size_t x = 0; x < e.size(); x += 2) {
+    const Entry &a = e[x], &b = e[x + 1];  // b is new
+    const std::uint32_t tb = slot[b.src >> 2];
+    const int ib = int(b.src & 3);
+    if (a.is_new && a.src == b.src) continue;  // a new boundary face: stays kImproveNone
+    if (a.is_new) {
+      const std::uint32_t ta = slot[a.src >> 2];
+      ta_[4 * std::size_t(tb) + ib] = 4 * ta + (a.src & 3);
+      ta_[4 * std::size_t(ta) + (a.src & 3)] = 4 * tb + std::uint32_t(ib);
+    } else {
+      link_face(tb, ib, a.src);
+    }
+  }
+  if (created) *created = slot;
+  return true;
+}
+
+std::uint32_t ImproveTets::add_interior_node(const double* p, float h) {
+  nodes_->push_back(p, NodeKind::interior, kNoFacet, h);
+  vtet_.push_back(kImproveNone);
+  return std::uint32_t(nodes_->size_count() - 1);
+}
+
+std::uint32_t ImproveTets::add_boundary_node(const double* p, NodeKind kind, std::uint32_t facet, float h) {
+  nodes_->push_back(p, kind, facet, h);
+  vtet_.push_back(kImproveNone);
+  return std::uint32_t(nodes_->size_count() - 1);
+}
+
+bool ImproveTets::remove(std::uint32_t t, std::uint32_t may_orphan) {
+  const std::uint32_t* tv = &tv_[4 * std::size_t(t)];
+  // Each vertex w of t needs a neighbour tet (across a face of t holding w) to stand for it.
+  std::uint32_t stand_in[4];
+  for (int i = 0; i < 4; ++i) {
+    stand_in[i] = kImproveNone;
+    for (int f = 0; f < 4 && stand_in[i] == kImproveNone; ++f)
+      if (f != i && ta_[4 * std::size_t(t) + f] != kImproveNone) stand_in[i] = ta_[4 * std::size_t(t) + f] >> 2;
+    if (stand_in[i] == kImproveNone && tv[i] != may_orphan) return false;
+  }
+  for (int i = 0; i < 4; ++i) {
+    const std::uint32_t r = ta_[4 * std::size_t(t) + i];
+    if (r != kImproveNone) ta_[r] = kImproveNone;
+    if (vtet_[tv[i]] == t) vtet_[tv[i]] = stand_in[i];
+  }
+  tv_[4 * std::size_t(t)] = kImproveNone;
+  ++version_[t];
+  free_.push_back(t);
+  return true;
+}
+
+void ImproveTets::star(std::uint32_t v, std::vector<std::uint32_t>& out) const {
+  // Thread-safe (no shared marks). "Seen" is a small open-addressing set on the stack (a star
+  // has a few dozen tets; a larger one falls back to scanning `out`).
+  constexpr std::uint32_t kSlots = 256, kEmpty = 0xFFFFFFFFu;
+  std::uint32_t seen[kSlots];
+  std::fill(seen, seen + kSlots, kEmpty);
+  auto insert = [&](std::uint32_t u) {  // true if u was not there
+    if (out.size() >= kSlots / 2) {
+      if (std::find(out.begin(), out.end(), u) != out.end()) return false;
+      out.push_back(u);
+      return true;
+    }
+    for (std::uint32_t h = (u * 0x9E3779B1u) >> 24;; h = (h + 1) & (kSlots - 1)) {
+      if (seen[h] == u) return false;
+      if (seen[h] == kEmpty) {
+        seen[h] = u;
+        out.push_back(u);
+        return true;
+      }
+    }
+  };
+  out.clear();
+  const std::uint32_t t0 = vtet_[v];
+  if (t0 == kImproveNone) return;
+  insert(t0);
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    const std::uint32_t t = out[k];
+    for (int i = 0; i < 4; ++i) {
+      if (tv_[4 * std::size_t(t) + i] == v) continue;  // the face opposite v does not hold v
+      const std::uint32_t r = ta_[4 * std::size_t(t) + i];
+      if (r != kImproveNone) insert(r >> 2);
+    }
+  }
+}
+
+namespace {
+
+/// The two vertices of tet v other than a and b, in the order (c, d) for which (a, b, c, d)
+/// has the tet's orientation. False if a or b is not a vertex of v.
+bool other_two(const std::uint32_t* v, std::uint32_t a, std::uint32_t b, std::uint32_t& c,
+               std::uint32_t& d) {
+  const int ia = index_in(v, a), ib = index_in(v, b);
+  if (ia < 0 || ib < 0) return false;
+  int o[2], k = 0;
+  for (int i = 0; i < 4; ++i)
+    if (i != ia && i != ib) o[k++] = i;
+  // (a, b, v[o0], v[o1]) has the orientation of the tet iff the permutation is even.
+  const int perm[4] = {ia, ib, o[0], o[1]};
+  int inv = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j) inv += perm[i] > perm[j];
+  c = v[o[0]], d = v[o[1]];
+  if (inv & 1) std::swap(c, d);
+  return true;
+}
+
+}  // namespace
+
+bool ImproveTets::edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b,
+                            std::vector<std::uint32_t>& ring,
+                            std::vector<std::uint32_t>& tets) const {
+  std::uint32_t c, d;
+  if (!ring_start(t, a, b, ring, tets, c, d)) return false;
+  std::uint32_t cur = t;
+  for (int guard = 0; guard < 256; ++guard) {
+    ring.push_back(c);
+    tets.push_back(cur);
+    if (!turn(cur, c, d)) return false;
+    if (cur == t) return true;
+  }
+  return false;
+}
+
+bool ImproveTets::ring_start(std::uint32_t t, std::uint32_t a, std::uint32_t b,
+                             std::vector<std::uint32_t>& ring, std::vector<std::uint32_t>& tets,
+                             std::uint32_t& c, std::uint32_t& d) const {
+  ring.clear();
+  tets.clear();
+  return other_two(&tv_[4 * std::size_t(t)], a, b, c, d);
+}
+
+bool ImproveTets::turn(std::uint32_t& cur, std::uint32_t& c, std::uint32_t& d) const {
+  const std::uint32_t r = ta_[4 * std::size_t(cur) + index_in(&tv_[4 * std::size_t(cur)], c)];
+  if (r == kImproveNone) return false;
+  cur = r >> 2;
+  c = d;
+  d = tv_[4 * std::size_t(cur) + (r & 3)];
+  return true;
+}
+
+bool ImproveTets::open_edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b, int max_ring,
+                                 std::vector<std::uint32_t>& ring,
+                                 std::vector<std::uint32_t>& tets) const {
+  std::uint32_t c, d;
+  if (!ring_start(t, a, b, ring, tets, c, d)) return false;
+  // Backwards (across the face (a, b, c), opposite d) to the tet with the first boundary face.
+  std::uint32_t cur = t;
+  for (int guard = 0;; ++guard) {
+    if (guard > max_ring) return false;
+    if (!turn(cur, d, c)) break;  // (the roles swapped: across the face opposite d)
+    if (cur == t) return false;  // closed ring
+  }
+  // Forwards (across (a, b, d), opposite c) to the other boundary face.
+  for (int guard = 0;; ++guard) {
+    if (guard >= max_ring) return false;
+    ring.push_back(c);
+    tets.push_back(cur);
+    if (!turn(cur, c, d)) {
+      ring.push_back(d);
+      return true;
+    }
+  }
+}
+
+std::size_t ImproveTets::write_back(VolumeMesh& mesh) const {
+  const std::size_t cap = tv_.size() / 4, np = nodes_->size_count();
+  std::vector<std::uint32_t> new_id(np, kImproveNone), tet_id(cap, kImproveNone);
+  std::uint32_t nn = 0, nt = 0;
+  for (std::size_t t = 0; t < cap; ++t) {
+    if (tv_[4 * t] == kImproveNone) continue;
+    tet_id[t] = nt++;
+    for (int i = 0; i < 4; ++i)
+      if (new_id[tv_[4 * t + i]] == kImproveNone) new_id[tv_[4 * t + i]] = 0;  // used
+  }
+  for (std::size_t i = 0; i < np; ++i)
+    if (new_id[i] != kImproveNone) new_id[i] = nn++;
+  // Boundary faces (in the old numbering): key, tet, outward vertices.
+  struct BFace {
+    Key key;
+    std::uint32_t tet;
+    std::array<std::uint32_t, 3> out;
+  };
+  std::vector<BFace> now;
+  for (std::size_t t = 0; t < cap; ++t) {
+    if (tv_[4 * t] == kImproveNone) continue;
+    for (int i = 0; i < 4; ++i)
+      if (ta_[4 * t + i] == kImproveNone) {
+        const std::uint32_t* v = &tv_[4 * t];
+        now.push_back({face_key(v, i), tet_id[t], {v[kTetFace[i][0]], v[kTetFace[i][1]], v[kTetFace[i][2]]}});
+      }
+  }
+  std::sort(now.begin(), now.end(), [](const BFace& a, const BFace& b) { return a.key < b.key; });
+  std::vector<std::uint8_t> used(now.size(), 0);
+  std::vector<std::uint32_t> boundary, boundary_tet;
+  boundary.reserve(3 * now.size());
+  boundary_tet.reserve(now.size());
+  std::size_t kept = 0;
+  for (std::size_t f = 0; f + 2 < mesh.boundary.size(); f += 3) {
+    const Key k = sorted_key(mesh.boundary[f], mesh.boundary[f + 1], mesh.boundary[f + 2]);
+    auto it = std::lower_bound(now.begin(), now.end(), k,
+                               [](const BFace& a, const Key& key) { return a.key < key; });
+    if (it == now.end() || it->key != k || used[std::size_t(it - now.begin())]) continue;
+    used[std::size_t(it - now.begin())] = 1;
+    ++kept;
+    for (int j = 0; j < 3; ++j) boundary.push_back(new_id[mesh.boundary[f + j]]);
+    boundary_tet.push_back(it->tet);
+  }
+  const std::size_t changed = (mesh.boundary.size() / 3 - kept) + (now.size() - kept);
+  for (std::size_t x = 0; x < now.size(); ++x) {
+    if (used[x]) continue;
+    for (int j = 0; j < 3; ++j) boundary.push_back(new_id[now[x].out[j]]);
+    boundary_tet.push_back(now[x].tet);
+  }
+  // Tets and regions.
+  std::vector<std::uint32_t> tets, region;
+  tets.reserve(4 * std::size_t(nt));
+  region.reserve(nt);
+  for (std::size_t t = 0; t < cap; ++t) {
+    if (tv_[4 * t] == kImproveNone) continue;
+    for (int i = 0; i < 4; ++i) tets.push_back(new_id[tv_[4 * t + i]]);
+    region.push_back(region_[t]);
+  }
+  // Nodes (compacted in id order).
+  NodeSet out;
+  out.points.xyz.reserve(3 * std::size_t(nn));
+  for (std::size_t i = 0; i < np; ++i)
+    if (new_id[i] != kImproveNone)
+      out.push_back(nodes_->points.p(std::uint32_t(i)), nodes_->kind[i], nodes_->facet[i],
+                    nodes_->size[i]);
+  mesh.tets = std::move(tets);
+  mesh.tet_region = std::move(region);
+  mesh.boundary = std::move(boundary);
+  mesh.boundary_tet = std::move(boundary_tet);
+  mesh.nodes = std::move(out);
+  return changed;
+}
+
+}  // namespace kdmesh

@@ -1,0 +1,476 @@
+// kdmesh — quality improvement of a volume mesh: the schedule of flips, relaxation and
+// smoothing, and the per-stage measurements (mesher/improve/mesh_improve.h).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/improve/mesh_improve.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <queue>
+#include <thread>
+#include <tuple>
+
+#include "core/error.h"
+#include "core/timer.h"
+#include "mesher/improve/improve_caps.h"
+#include "mesher/improve/improve_flips.h"
+#include "mesher/improve/improve_insert.h"
+#include "mesher/improve/improve_split.h"
+#include "mesher/improve/improve_split_boundary.h"
+#include "mesher/improve/improve_quality.h"
+#include "mesher/improve/improve_smooth.h"
+#include "mesher/improve/improve_tets.h"
+#include "mesher/parallel_for.h"
+#include "mesher/quality/quality.h"
+
+namespace kdmesh {
+
+namespace {
+
+ImproveStage measure(const ImproveTets& m, const std::string& name) {
+  ImproveStage s;
+  s.name = name;
+  const std::size_t cap = m.capacity();
+  std::vector<float> mind(cap, -1), maxd(cap, -1), rr(cap, 0);
+  parallel_for(cap, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t t = b; t < e; ++t) {
+      if (!m.alive(std::uint32_t(t))) continue;
+      const std::uint32_t* v = m.v(std::uint32_t(t));
+      const TetQuality q = tet_quality(m.p(v[0]), m.p(v[1]), m.p(v[2]), m.p(v[3]));
+      mind[t] = float(q.min_dihedral);
+      maxd[t] = float(q.max_dihedral);
+      rr[t] = float(q.radius_ratio);
+    }
+  });
+  s.min_dihedral = 180;
+  double sum = 0;
+  for (std::size_t t = 0; t < cap; ++t) {
+    if (mind[t] < 0) continue;
+    ++s.tets;
+    s.min_dihedral = std::min(s.min_dihedral, double(mind[t]));
+    s.max_dihedral = std::max(s.max_dihedral, double(maxd[t]));
+    sum += rr[t];
+    s.under5 += mind[t] < 5;
+    s.under10 += mind[t] < 10;
+    s.under12 += mind[t] < 12;
+    s.over165 += maxd[t] > 165;
+  }
+  s.mean_radius_ratio = s.tets ? sum / double(s.tets) : 0;
+  return s;
+}
+
+struct Counters {
+  std::size_t edge_removals = 0, face_removals = 0, boundary_flips = 0;
+};
+
+/// tet_sine of every tet slot (+inf for dead slots), kept up to date by the passes so that a
+/// stage that changes little costs little: flips set the slots they kill and create, vertex
+/// passes the stars of the vertices they moved.
+class SineCache {
+ public:
+  SineCache(const ImproveTets& m, unsigned threads) : m_(m), threads_(threads) { refresh_all(); }
+  const std::vector<double>& q() const { return q_; }
+  void refresh_all() {
+    q_.assign(m_.capacity(), std::numeric_limits<double>::infinity());
+    parallel_for(q_.size(), [&](std::size_t b, std::size_t e, unsigned) {
+      for (std::size_t t = b; t < e; ++t)
+        if (m_.alive(std::uint32_t(t))) q_[t] = sine_of(m_, std::uint32_t(t));
+    }, 65536, threads_);
+  }
+  /// Slot t changed (created, killed, or a vertex moved); returns its sine.
+  double refresh(std::uint32_t t) {
+    if (t >= q_.size()) q_.resize(m_.capacity(), std::numeric_limits<double>::infinity());
+    return q_[t] = m_.alive(t) ? sine_of(m_, t) : std::numeric_limits<double>::infinity();
+  }
+  /// The vertices in `moved` changed position.
+  void refresh_stars(const std::vector<std::uint32_t>& moved) {
+    if (moved.size() > m_.capacity() / 64) return refresh_all();
+    std::vector<std::uint32_t> star;
+    for (std::uint32_t v : moved) {
+      m_.star(v, star);
+      for (std::uint32_t t : star) refresh(t);
+    }
+  }
+
+ private:
+  const ImproveTets& m_;
+  unsigned threads_;
+  std::vector<double> q_;
+};
+
+/// Flips until no tet below `threshold` has an improving edge or face removal (or, given
+/// `boundary`, boundary edge removal). Tets are taken worst first (ties by id); each takes the
+/// best of its candidates.
+std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring,
+                      Counters& c, const BoundaryContext* boundary = nullptr) {
+  using Entry = std::tuple<double, std::uint32_t, std::uint32_t>;  // quality, tet, version
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
+  for (std::uint32_t t = 0; t < m.capacity(); ++t)
+    if (cache.q()[t] < threshold) heap.emplace(cache.q()[t], t, m.version(t));
+  std::size_t ops = 0;
+  FlipCandidate cand, best;
+  std::vector<std::uint32_t> created;
+  while (!heap.empty()) {
+    const auto [q, t, ver] = heap.top();
+    heap.pop();
+    if (!m.alive(t) || m.version(t) != ver) continue;
+    best.q_new = -1;
+    best.q_old = 0;
+    bool have = false, best_is_edge = false, best_is_boundary = false;
+    const std::uint32_t* v = m.v(t);
+    // Validity (exact orientation, inside tests) is checked last, only for a candidate that
+    // would become the best: the same choice as checking every candidate, for less work.
+    const double* sines = cache.q().data();
+    for (const auto& e : kTetEdge)
+      if (edge_removal(m, t, v[e[0]], v[e[1]], max_ring, cand, have ? best.q_new : -1, sines,
+                       false) &&
+          cand.improves() && (!have || cand.q_new > best.q_new) && flip_valid(m, cand)) {
+        std::swap(best, cand);
+        have = best_is_edge = true;
+      }
+    for (int i = 0; i < 4; ++i)
+      if (face_removal(m, t, i, cand, sines, false) && cand.improves() &&
+          (!have || cand.q_new > best.q_new) && flip_valid(m, cand)) {
+        std::swap(best, cand);
+        have = true;
+        best_is_edge = false;
+      }
+    if (boundary)
+      for (const auto& e : kTetEdge)
+        if (boundary_edge_removal(m, t, v[e[0]], v[e[1]], max_ring, *boundary, cand,
+                                  have ? best.q_new : -1, sines) &&
+            cand.improves() && (!have || cand.q_new > best.q_new)) {
+          std::swap(best, cand);
+          have = best_is_boundary = true;
+          best_is_edge = false;
+        }
+    if (!have) continue;
+    if (!m.replace(best.old, best.fresh, &created, best_is_boundary)) continue;
+    ++ops;
+    ++(best_is_boundary ? c.boundary_flips : best_is_edge ? c.edge_removals : c.face_removals);
+    for (std::uint32_t o : best.old) cache.refresh(o);
+    for (std::uint32_t n : created) {
+      const double qn = cache.refresh(n);
+      if (qn < threshold) heap.emplace(qn, n, m.version(n));
+    }
+  }
+  return ops;
+}
+
+/// Calls move(v) for every vertex of `verts` (sorted ids), on up to `threads` threads, with a
+/// result independent of their number. A move reads the positions of the vertex's star and
+/// writes only its own position (and surface facet), so two vertices that share no tet may
+/// move at the same time. The vertices are coloured greedily in id order (each takes the
+/// smallest colour none of its earlier neighbours in `verts` has); the colours run one after
+/// another, in each colour all its vertices at once. Every move therefore sees the same
+/// positions whatever the thread count: neighbours of an earlier colour have moved, those of
+/// a later one have not.
+template <class Move>
+std::vector<std::uint32_t> colour_pass(ImproveTets& m, const std::vector<std::uint32_t>& verts,
+                                       unsigned threads, Move&& move) {
+  const std::size_t n = verts.size();
+  std::vector<std::uint32_t> slot(m.nodes().size_count(), kImproveNone);
+  for (std::size_t k = 0; k < n; ++k) slot[verts[k]] = std::uint32_t(k);
+  // Earlier neighbours of each vertex (positions in verts): each worker lists those of its
+  // contiguous range, then the lists are laid out in order.
+  std::vector<std::uint32_t> start(n + 1, 0), nb;
+  std::vector<std::vector<std::uint32_t>> lists(std::max(1u, std::thread::hardware_concurrency()));
+  std::vector<std::size_t> first(lists.size(), n);
+  parallel_for(n, [&](std::size_t b, std::size_t e, unsigned w) {
+    std::vector<std::uint32_t> star;
+    std::vector<std::uint32_t>& out = lists[w];
+    first[w] = b;
+    for (std::size_t k = b; k < e; ++k) {
+      const std::uint32_t v = verts[k];
+      m.star(v, star);
+      const std::size_t before = out.size();
+      for (std::uint32_t t : star)
+        for (int i = 0; i < 4; ++i) {
+          const std::uint32_t u = m.v(t)[i];
+          if (u != v && slot[u] < k) out.push_back(slot[u]);
+        }
+      start[k + 1] = std::uint32_t(out.size() - before);
+    }
+  }, 1024, threads);
+  for (std::size_t k = 0; k < n; ++k) start[k + 1] += start[k];
+  nb.resize(start[n]);
+  for (std::size_t w = 0; w < lists.size(); ++w)
+    if (first[w] < n) std::copy(lists[w].begin(), lists[w].end(), nb.begin() + start[first[w]]);
+  // Greedy colouring (a neighbour seen through several tets is listed several times).
+  std::vector<std::uint32_t> colour(n), used;
+  std::uint32_t colours = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    used.assign(colours + 1, 0);
+    for (std::uint32_t i = start[k]; i < start[k + 1]; ++i) used[colour[nb[i]]] = 1;
+    std::uint32_t c = 0;
+    while (used[c]) ++c;
+    colour[k] = c;
+    colours = std::max(colours, c + 1);
+  }
+  std::vector<std::vector<std::uint32_t>> by_colour(colours);
+  for (std::size_t k = 0; k < n; ++k) by_colour[colour[k]].push_back(verts[k]);
+  std::vector<std::uint8_t> moved(n, 0);
+  for (const std::vector<std::uint32_t>& group : by_colour)
+    parallel_for(group.size(), [&](std::size_t b, std::size_t e, unsigned) {
+      for (std::size_t k = b; k < e; ++k) moved[slot[group[k]]] = move(group[k]);
+    }, 256, threads);
+  std::vector<std::uint32_t> out;
+  for (std::size_t k = 0; k < n; ++k)
+    if (moved[k]) out.push_back(verts[k]);
+  return out;
+}
+
+/// Smooths every vertex of a tet below `threshold`; returns the vertices moved.
+std::vector<std::uint32_t> smooth_pass(ImproveTets& m, const SineCache& cache, double threshold,
+                                       const SmoothContext& ctx, unsigned threads) {
+  std::vector<std::uint8_t> pick(m.nodes().size_count(), 0);
+  const std::vector<double>& q = cache.q();
+  for (std::uint32_t t = 0; t < m.capacity(); ++t)
+    if (q[t] < threshold)
+      for (int i = 0; i < 4; ++i) pick[m.v(t)[i]] = 1;
+  std::vector<std::uint32_t> verts;
+  for (std::uint32_t v = 0; v < pick.size(); ++v)
+    if (pick[v]) verts.push_back(v);
+  return colour_pass(m, verts, threads, [&](std::uint32_t v) { return smooth_vertex(m, v, ctx); });
+}
+
+/// Smart-Laplacian relaxation of every vertex of a tet whose radius ratio is below `below`;
+/// returns the vertices moved.
+std::vector<std::uint32_t> relax_pass(ImproveTets& m, double below, double floor, const SmoothContext& ctx,
+                       unsigned threads) {
+  std::vector<std::uint8_t> low(m.capacity(), 0), pick(m.nodes().size_count(), 0);
+  parallel_for(low.size(), [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t t = b; t < e; ++t) {
+      if (!m.alive(std::uint32_t(t))) continue;
+      const std::uint32_t* v = m.v(std::uint32_t(t));
+      low[t] = tet_radius_ratio(m.p(v[0]), m.p(v[1]), m.p(v[2]), m.p(v[3])) < below;
+    }
+  }, 65536, threads);
+  for (std::uint32_t t = 0; t < m.capacity(); ++t)
+    if (low[t])
+      for (int i = 0; i < 4; ++i) pick[m.v(t)[i]] = 1;
+  std::vector<std::uint32_t> verts;
+  for (std::uint32_t v = 0; v < pick.size(); ++v)
+    if (pick[v]) verts.push_back(v);
+  return colour_pass(m, verts, threads,
+                   [&](std::uint32_t v) { return relax_vertex(m, v, ctx, floor); });
+}
+
+
+/// Takes out every boundary cap below `threshold` (worst first, ties by id); a tet that a
+/// removal leaves with two boundary faces is tried too. Returns how many were removed.
+std::size_t cap_pass(ImproveTets& m, SineCache& cache, double threshold, const BoundaryContext& ctx) {
+  using Entry = std::tuple<double, std::uint32_t, std::uint32_t>;  // quality, tet, version
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
+  for (std::uint32_t t = 0; t < m.capacity(); ++t)
+    if (cache.q()[t] < threshold) heap.emplace(cache.q()[t], t, m.version(t));
+  std::size_t removed = 0;
+  while (!heap.empty()) {
+    const auto [q, t, ver] = heap.top();
+    heap.pop();
+    if (!m.alive(t) || m.version(t) != ver) continue;
+    std::uint32_t nbr[4];
+    for (int i = 0; i < 4; ++i) nbr[i] = m.adj(t, i);
+    if (!remove_cap(m, t, ctx)) continue;
+    ++removed;
+    cache.refresh(t);
+    for (std::uint32_t r : nbr)
+      if (r != kImproveNone && cache.q()[r >> 2] < threshold)
+        heap.emplace(cache.q()[r >> 2], r >> 2, m.version(r >> 2));
+  }
+  return removed;
+}
+
+struct SplitCounts {
+  std::size_t interior = 0, boundary = 0, inserted = 0;
+  /// Adds them to the stats; returns their sum (the stage's operations).
+  std::size_t add_to(ImproveStats& st) const {
+    st.splits += interior;
+    st.boundary_splits += boundary;
+    st.insertions += inserted;
+    return interior + boundary + inserted;
+  }
+};
+
+/// Splits tet t's longest boundary edge that split_boundary_edge accepts (longest first, ties
+/// by position in t). Returns true if one was split.
+bool split_a_boundary_edge(ImproveTets& m, std::uint32_t t, int max_ring, const BoundaryContext& ctx,
+                           std::vector<std::uint32_t>& created) {
+  for (const auto& [len2, e] : edges_longest_first(m, t)) {
+    const std::uint32_t a = m.v(t)[kTetEdge[e][0]], b = m.v(t)[kTetEdge[e][1]];
+    if (split_boundary_edge(m, t, a, b, max_ring, ctx, &created)) return true;
+  }
+  return false;
+}
+
+/// Splits every tet below `threshold` with three or four vertices on the surface (the
+/// smoothing cannot move those apart; worst first, ties by id): an interior edge through a new
+/// interior node (split_sliver); failing that, a boundary edge through a new surface node
+/// (split_boundary_edge, when `boundary` is given); failing that, the tet and its neighbours
+/// are replaced by a fan around a new interior node (insert_in_cavity). Returns the counts.
+SplitCounts split_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring,
+                       const BoundaryContext* boundary, bool insert, bool any_tet = false) {
+  std::vector<std::pair<double, std::uint32_t>> bad;
+  const NodeSet& nodes = m.nodes();
+  for (std::uint32_t t = 0; t < m.capacity(); ++t) {
+    if (!(cache.q()[t] < threshold)) continue;
+    const std::uint32_t* v = m.v(t);
+    int on_surface = 0;
+    for (int i = 0; i < 4; ++i) on_surface += nodes.kind[v[i]] != NodeKind::interior;
+    if (on_surface >= 3 || any_tet) bad.push_back({cache.q()[t], t});
+  }
+  std::sort(bad.begin(), bad.end());
+  SplitCounts n;
+  std::vector<std::uint32_t> created;
+  for (const auto& [q, t] : bad) {
+    if (!m.alive(t) || !(cache.q()[t] < threshold)) continue;
+    int on_surface = 0;
+    for (int i = 0; i < 4; ++i) on_surface += nodes.kind[m.v(t)[i]] != NodeKind::interior;
+    if (on_surface < 3) {  // (any_tet) vertices the smoothing could not move far enough
+      if (!insert || !insert_in_cavity(m, t, &created)) continue;
+      ++n.inserted;
+    } else if (split_sliver(m, t, max_ring, nullptr, &created)) {
+      ++n.interior;
+    } else if (boundary && split_a_boundary_edge(m, t, max_ring, *boundary, created)) {
+      ++n.boundary;
+    } else if (insert && insert_in_cavity(m, t, &created)) {
+      ++n.inserted;
+    } else {
+      continue;
+    }
+    for (std::uint32_t c : created) cache.refresh(c);
+  }
+  if (n.interior + n.boundary + n.inserted) cache.refresh_all();  // the dead slots of the split rings
+  return n;
+}
+
+}  // namespace
+
+ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
+                          const SurfaceQuery& query, const SizingField& sizing,
+                          const ImproveOptions& options) {
+  if (!(options.work_angle > 0 && options.work_angle < 90))
+    throw UsageError("improve_mesh: work_angle must be in (0, 90) degrees");
+  if (options.rounds < 0) throw UsageError("improve_mesh: rounds must be >= 0");
+  if (options.max_ring < 3) throw UsageError("improve_mesh: max_ring must be >= 3");
+  Stopwatch total, sw;
+  ImproveStats st;
+  const int total_stages = 1 + 2 * options.rounds + std::min(options.rounds, options.relax_rounds) +
+                           (options.rounds > 0 && (options.cap_angle > 0 || options.split_angle > 0));
+  ImproveTets m(mesh.nodes, mesh.tets, mesh.tet_region);
+  m.inside_query = &query;
+  auto stage = [&](const std::string& name, std::size_t ops) {
+    const double seconds = sw.seconds();
+    ImproveStage s;
+    if (options.measure_stages) s = measure(m, name);
+    s.name = name;
+    s.operations = ops;
+    s.seconds = seconds;
+    st.stages.push_back(s);
+    if (options.progress)  // extra rounds (max_rounds) hold below 1 until the end
+      options.progress("improve", std::min(double(st.stages.size()), double(total_stages - 1)) / double(total_stages));
+    sw.reset();
+  };
+  stage("input", 0);  // its time: building the adjacency
+  double diag = 0;
+  for (int k = 0; k < 3; ++k)
+    diag += (surface.bbox_max[k] - surface.bbox_min[k]) * (surface.bbox_max[k] - surface.bbox_min[k]);
+  diag = std::sqrt(diag);
+  const double threshold = deg_to_sine(options.work_angle);
+  const double smooth_threshold = deg_to_sine(options.smooth_angle);
+  Counters c;
+  SineCache cache(m, options.threads);
+  BoundaryContext boundary;
+  boundary.surface = &surface;
+  boundary.query = &query;
+  boundary.sizing = &sizing;
+  boundary.max_distance = 0.8 * options.hausdorff_tolerance;
+  FeatureEdges features;
+  if (options.feature_angle > 0) {
+    features = detect_sharp_edges(surface.mesh, options.feature_angle);
+    boundary.features = &features;
+  }
+  SmoothContext ctx;
+  if (options.smooth_surface) {
+    ctx.surface = &surface;
+    ctx.query = &query;
+    if (options.slide_curved) ctx.boundary = &boundary;
+    ctx.slide_features = options.slide_features;
+  }
+  ctx.on_surface = 1e-11 * diag;
+  const BoundaryContext* flip_boundary = options.flip_boundary ? &boundary : nullptr;
+  const BoundaryContext* split_boundary = options.split_boundary ? &boundary : nullptr;
+  const double cap_threshold = options.cap_angle > 0 ? deg_to_sine(options.cap_angle) : -1;
+  // Rounds beyond `rounds` continue while the tets below the target keep getting fewer: until
+  // none is left, or three rounds in a row found no new low (the count is not monotone: the
+  // handle at diag/20 went 62, 39, 28, 33, 28, 23, 22, 19, 20, 20, 15, 9, 0 over rounds 4-16).
+  const double target = deg_to_sine(options.target_angle);
+  std::size_t fewest = std::numeric_limits<std::size_t>::max();
+  int stalled = 0;
+  const int max_rounds = options.rounds > 0 ? std::max(options.rounds, options.max_rounds) : 0;
+  for (int r = 0; r < max_rounds; ++r) {
+    if (r >= options.rounds) {
+      std::size_t below = 0;
+      for (double q : cache.q()) below += q < target;
+      if (below == 0) break;
+      if (below < fewest) {
+        fewest = below;
+        stalled = 0;
+      } else if (++stalled == 3) {
+        break;
+      }
+    }
+    const std::string n = std::to_string(r + 1);
+    st.rounds = r + 1;
+    std::size_t ops = flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
+    if (cap_threshold > 0) {
+      const std::size_t removed = cap_pass(m, cache, cap_threshold, boundary);
+      st.caps_removed += removed;
+      if (removed) ops += removed + flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
+    }
+    if (options.split_angle > 0) {
+      ops += split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary,
+                        options.insert_nodes).add_to(st);
+    }
+    stage("flip " + n, ops);
+    if (r < options.relax_rounds) {
+      const std::vector<std::uint32_t> relaxed =
+          relax_pass(m, options.relax_below, threshold, ctx, options.threads);
+      cache.refresh_stars(relaxed);
+      st.relaxed += relaxed.size();
+      stage("relax " + n, relaxed.size());
+    }
+    const std::vector<std::uint32_t> moved =
+        smooth_pass(m, cache, smooth_threshold, ctx, options.threads);
+    cache.refresh_stars(moved);
+    st.smoothed += moved.size();
+    for (std::uint32_t v : moved) st.feature_slides += m.nodes().kind[v] == NodeKind::edge;
+    stage("smooth " + n, moved.size());
+  }
+  // The last smoothing can leave a cap or a sliver that an earlier pass would have taken
+  // (a base vertex moved in a star whose worst tet was worse): one more flip, cap and split
+  // pass, without moves (a sphere of 1,280 facets kept a 1.3 deg cap this way).
+  if (options.rounds > 0 && (cap_threshold > 0 || options.split_angle > 0)) {
+    std::size_t ops = 0;
+    if (cap_threshold > 0) {
+      const std::size_t removed = cap_pass(m, cache, cap_threshold, boundary);
+      st.caps_removed += removed;
+      ops += removed;
+    }
+    if (options.split_angle > 0) {
+      ops += split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary,
+                        options.insert_nodes, /*any_tet=*/true).add_to(st);
+    }
+    if (ops) ops += flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
+    stage("final", ops);
+  }
+  if (options.progress) options.progress("improve", 1.0);
+  st.edge_removals = c.edge_removals;
+  st.face_removals = c.face_removals;
+  st.boundary_flips = c.boundary_flips;
+  st.boundary_changes = m.write_back(mesh);
+  st.seconds = total.seconds();
+  return st;
+}
+
+}  // namespace kdmesh

@@ -1,0 +1,126 @@
+// kdmesh — multi-level hash grid for node spacing queries.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/placement/spacing_grid.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace kdmesh {
+
+namespace {
+constexpr int kLevels = 31;
+// 19 bits per axis and 6 level bits; cell indices are offset so that they stay positive.
+constexpr std::int64_t kAxisBits = 19;
+constexpr std::int64_t kAxisMax = (std::int64_t(1) << kAxisBits) - 1;
+
+std::uint64_t mix(std::uint64_t x) {
+  x ^= x >> 33;
+  x *= 0xff51afd7ed558ccdULL;
+  x ^= x >> 33;
+  x *= 0xc4ceb9fe1a85ec53ULL;
+  return x ^ (x >> 33);
+}
+}  // namespace
+
+SpacingGrid::SpacingGrid(const double* lo, double s0) : s0_(s0) {
+  for (int a = 0; a < 3; ++a) lo_[a] = lo[a];
+  keys_.assign(1024, 0);
+  heads_.assign(1024, kEmpty);
+}
+
+int SpacingGrid::level_of(double h) const {
+  if (!(h >= 2 * s0_)) return 0;
+  const int l = std::ilogb(h / s0_);  // floor(log2(h / s0)) for normal values
+  return std::min(l, kLevels - 1);
+}
+
+std::uint64_t SpacingGrid::key_cells(int level, std::int64_t i, std::int64_t j,
+                                     std::int64_t k) const {
+  // Cells beyond the table range are clamped: clamping merges far cells into one bucket,
+  // which only costs time (every node found is still tested by its true distance) as long
+  // as queries use the same clamped keys; the grid is sized so that this does not happen.
+  auto c = [](std::int64_t x) { return std::uint64_t(std::clamp<std::int64_t>(x + 2, 0, kAxisMax)); };
+  return (std::uint64_t(level + 1) << (3 * kAxisBits)) | (c(i) << (2 * kAxisBits)) |
+         (c(j) << kAxisBits) | c(k);
+}
+
+std::uint64_t SpacingGrid::key(int level, const double* p) const {
+  const double s = std::ldexp(s0_, level);
+  return key_cells(level, std::int64_t(std::floor((p[0] - lo_[0]) / s)),
+                   std::int64_t(std::floor((p[1] - lo_[1]) / s)),
+                   std::int64_t(std::floor((p[2] - lo_[2]) / s)));
+}
+
+std::uint32_t SpacingGrid::find(std::uint64_t k) const {
+  const std::size_t mask = keys_.size() - 1;
+  for (std::size_t slot = mix(k) & mask;; slot = (slot + 1) & mask) {
+    if (keys_[slot] == k) return heads_[slot];
+    if (keys_[slot] == 0) return kEmpty;
+  }
+}
+
+void SpacingGrid::grow() {
+  std::vector<std::uint64_t> keys(keys_.size() * 2, 0);
+  std::vector<std::uint32_t> heads(keys.size(), kEmpty);
+  const std::size_t mask = keys.size() - 1;
+  for (std::size_t s = 0; s < keys_.size(); ++s) {
+    if (keys_[s] == 0) continue;
+    std::size_t slot = mix(keys_[s]) & mask;
+    while (keys[slot] != 0) slot = (slot + 1) & mask;
+    keys[slot] = keys_[s];
+    heads[slot] = heads_[s];
+  }
+  keys_.swap(keys);
+  heads_.swap(heads);
+}
+
+std::uint32_t SpacingGrid::insert(const double* p, double h) {
+  const std::uint32_t id = std::uint32_t(h_.size());
+  const int level = level_of(h);
+  level_mask_ |= 1u << level;
+  xyz_.insert(xyz_.end(), p, p + 3);
+  h_.push_back(h);
+  if (2 * (used_ + 1) > keys_.size()) grow();
+  const std::uint64_t k = key(level, p);
+  const std::size_t mask = keys_.size() - 1;
+  std::size_t slot = mix(k) & mask;
+  while (keys_[slot] != 0 && keys_[slot] != k) slot = (slot + 1) & mask;
+  if (keys_[slot] == 0) {
+    keys_[slot] = k;
+    ++used_;
+  }
+  next_.push_back(heads_[slot]);
+  heads_[slot] = id;
+  return id;
+}
+
+bool SpacingGrid::conflicts(const double* p, double h, double beta) const {
+  for (int level = 0; level < kLevels; ++level) {
+    if (!(level_mask_ >> level & 1u)) continue;
+    const double s = std::ldexp(s0_, level);
+    // Nodes of this level have h_q < 2 s (level 0: h_q < 2 s0 or smaller), so a conflict
+    // needs |p - q| < beta * (h + 2 s) / 2.
+    const double reach = beta * (h + 2 * s) / 2;
+    // Lipschitz skip: q at this level has h_q < 2 s (stored values; 1e-4 slack covers the
+    // float rounding of sizes stored in a NodeSet), so |p - q| >= (h - h_q) / g > reach.
+    if (lipschitz_ > 0 && h - 2.0002 * s > lipschitz_ * reach) continue;
+    std::int64_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::int64_t(std::floor((p[a] - reach - lo_[a]) / s));
+      hi[a] = std::int64_t(std::floor((p[a] + reach - lo_[a]) / s));
+    }
+    for (std::int64_t i = lo[0]; i <= hi[0]; ++i)
+      for (std::int64_t j = lo[1]; j <= hi[1]; ++j)
+        for (std::int64_t k = lo[2]; k <= hi[2]; ++k) {
+          for (std::uint32_t q = find(key_cells(level, i, j, k)); q != kEmpty; q = next_[q]) {
+            const double* x = &xyz_[3 * std::size_t(q)];
+            const double dx = x[0] - p[0], dy = x[1] - p[1], dz = x[2] - p[2];
+            const double lim = beta * (h + h_[q]) / 2;
+            if (dx * dx + dy * dy + dz * dz < lim * lim) return true;
+          }
+        }
+  }
+  return false;
+}
+
+}  // namespace kdmesh

@@ -1,0 +1,305 @@
+// kdmesh — independent validity check of a volume mesh against its input surface.
+// Everything is recomputed from mesh.tets, mesh.nodes and the surface; nothing of the mesher's
+// own bookkeeping is trusted (mesh.boundary is only compared against the recomputed faces).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/quality/mesh_check.h"
+#include "mesher/quality/quality.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <sstream>
+
+#include "mesher/parallel_for.h"
+#include "mesher/delaunay/predicates.h"
+
+namespace kdmesh {
+
+namespace {
+
+std::string xyz(const double* p) {
+  std::ostringstream s;
+  s.precision(9);
+  s << "(" << p[0] << ", " << p[1] << ", " << p[2] << ")";
+  return s.str();
+}
+
+struct Face {
+  std::array<std::uint32_t, 3> key;  // sorted ids
+  std::array<std::uint32_t, 3> out;  // outward (from its tet) orientation
+  std::uint32_t tet;
+};
+
+// Parity of the permutation taking `a` to `b` (same vertex set): true if even.
+bool same_cycle(const std::array<std::uint32_t, 3>& a, const std::array<std::uint32_t, 3>& b) {
+  for (int r = 0; r < 3; ++r)
+    if (a[0] == b[r] && a[1] == b[(r + 1) % 3] && a[2] == b[(r + 2) % 3]) return true;
+  return false;
+}
+
+}  // namespace
+
+bool MeshCheck::only_sizing_failures() const {
+  return !failures.empty() && nonpositive_tets == 0 && flat_tets == 0 && outside_tets == 0 &&
+         offsurface_vertices == 0 && open_edges == 0 && nonmanifold_vertices == 0 &&
+         failures.size() == std::size_t(offsurface_faces > 0) + std::size_t(volume_off);
+}
+
+MeshCheck check_volume_mesh(const VolumeMesh& mesh, const PreparedSurface& surface,
+                            const SurfaceQuery& query, const SizingField& sizing,
+                            const MeshCheckOptions& options) {
+  MeshCheck c;
+  const PointSet& pts = mesh.nodes.points;
+  const std::size_t np = pts.size(), nt = mesh.num_tets();
+  c.tets = nt;
+  c.solid_volume = surface.volume;
+  constexpr std::size_t kShow = 5;
+
+  // ---- ids ----
+  for (std::size_t k = 0; k < mesh.tets.size(); ++k)
+    if (mesh.tets[k] >= np) {
+      c.failures.push_back("tet " + std::to_string(k / 4) + " references point " +
+                           std::to_string(mesh.tets[k]) + " of " + std::to_string(np));
+      return c;
+    }
+  if (mesh.tets.size() % 4 != 0) {
+    c.failures.push_back("tet array length " + std::to_string(mesh.tets.size()) + " is not a multiple of 4");
+    return c;
+  }
+
+  // ---- per tet: exact orientation, centroid inside, volume ----
+  std::vector<std::uint8_t> bad_orient(nt, 0), outside(nt, 0);
+  std::vector<double> vol_part(64, 0.0);
+  parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned w) {
+    double vol = 0;
+    for (std::size_t t = b; t < e; ++t) {
+      const std::uint32_t* v = &mesh.tets[4 * t];
+      const double *a = pts.p(v[0]), *bb = pts.p(v[1]), *cc = pts.p(v[2]), *d = pts.p(v[3]);
+      if (pred::orient3d(a, bb, cc, d) <= 0) bad_orient[t] = 1;
+      else if (volume_length(a, bb, cc, d) < kZeroVolumeLength) bad_orient[t] = 2;  // zero volume
+      double m[3];
+      for (int k = 0; k < 3; ++k) m[k] = (a[k] + bb[k] + cc[k] + d[k]) / 4;
+      if (query.side(m) != 1) outside[t] = 1;
+      const double u[3] = {bb[0] - a[0], bb[1] - a[1], bb[2] - a[2]};
+      const double x[3] = {cc[0] - a[0], cc[1] - a[1], cc[2] - a[2]};
+      const double y[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+      vol += (u[0] * (x[1] * y[2] - x[2] * y[1]) + u[1] * (x[2] * y[0] - x[0] * y[2]) +
+              u[2] * (x[0] * y[1] - x[1] * y[0])) / 6;
+    }
+    vol_part[w] += vol;
+  }, 1024, 64);
+  for (double v : vol_part) c.mesh_volume += v;
+  {
+    std::ostringstream o, s, f;
+    for (std::size_t t = 0; t < nt; ++t) {
+      if (bad_orient[t] == 1 && c.nonpositive_tets++ < kShow) o << " " << t;
+      if (bad_orient[t] == 2 && c.flat_tets++ < kShow) f << " " << t;
+      if (outside[t] && c.outside_tets++ < kShow) {
+        const std::uint32_t* v = &mesh.tets[4 * t];
+        double m[3];
+        for (int k = 0; k < 3; ++k) m[k] = (pts.p(v[0])[k] + pts.p(v[1])[k] + pts.p(v[2])[k] + pts.p(v[3])[k]) / 4;
+        s << " " << t << " at " << xyz(m);
+      }
+    }
+    if (c.nonpositive_tets)
+      c.failures.push_back(std::to_string(c.nonpositive_tets) + " tet(s) not positively oriented (exact orient3d <= 0), e.g. tet" + o.str());
+    if (c.flat_tets)
+      c.failures.push_back(std::to_string(c.flat_tets) + " tet(s) of zero volume at rounding level (volume-length ratio < 1e-9), e.g. tet" + f.str());
+    if (c.outside_tets)
+      c.failures.push_back(std::to_string(c.outside_tets) + " tet(s) with the centroid not strictly inside the solid, e.g. tet" + s.str());
+  }
+
+  // ---- faces by matching: once = boundary, twice = interior (must be opposite), more = error ----
+  static constexpr int kF[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  std::vector<Face> faces(4 * nt);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int i = 0; i < 4; ++i) {
+      Face& f = faces[4 * t + i];
+      for (int j = 0; j < 3; ++j) f.out[j] = mesh.tets[4 * t + kF[i][j]];
+      f.key = f.out;
+      std::sort(f.key.begin(), f.key.end());
+      f.tet = std::uint32_t(t);
+    }
+  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.key < b.key; });
+  std::vector<std::array<std::uint32_t, 3>> bnd;  // outward
+  std::size_t overfull = 0, same_side = 0;
+  std::ostringstream over_ex, same_ex;
+  for (std::size_t i = 0; i < faces.size();) {
+    std::size_t j = i;
+    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
+    if (j - i == 1) {
+      bnd.push_back(faces[i].out);
+    } else if (j - i == 2) {
+      if (same_cycle(faces[i].out, faces[i + 1].out) && same_side++ < kShow)
+        same_ex << " tets " << faces[i].tet << "/" << faces[i + 1].tet;
+    } else if (overfull++ < kShow) {
+      over_ex << " face " << xyz(pts.p(faces[i].key[0])) << "-" << xyz(pts.p(faces[i].key[1])) << "-"
+              << xyz(pts.p(faces[i].key[2])) << " in " << (j - i) << " tets";
+    }
+    i = j;
+  }
+  c.boundary_faces = bnd.size();
+  if (overfull)
+    c.failures.push_back(std::to_string(overfull) + " face(s) shared by more than two tets, e.g." + over_ex.str());
+  if (same_side)
+    c.failures.push_back(std::to_string(same_side) + " face(s) whose two tets lie on the same side (overlap), e.g." + same_ex.str());
+  {
+    // The mesher's own boundary list must be exactly these faces.
+    std::vector<std::array<std::uint32_t, 3>> a, b;
+    for (auto f : bnd) std::sort(f.begin(), f.end()), a.push_back(f);
+    for (std::size_t k = 0; k + 2 < mesh.boundary.size(); k += 3) {
+      std::array<std::uint32_t, 3> f = {mesh.boundary[k], mesh.boundary[k + 1], mesh.boundary[k + 2]};
+      std::sort(f.begin(), f.end());
+      b.push_back(f);
+    }
+    std::sort(a.begin(), a.end());
+    std::sort(b.begin(), b.end());
+    if (a != b)
+      c.failures.push_back("the mesh's boundary list (" + std::to_string(b.size()) +
+                           " faces) differs from the faces found in its tets (" + std::to_string(a.size()) + ")");
+  }
+
+  // ---- boundary vertices on the surface ----
+  double diag = 0;
+  for (int k = 0; k < 3; ++k) diag += (surface.bbox_max[k] - surface.bbox_min[k]) * (surface.bbox_max[k] - surface.bbox_min[k]);
+  diag = std::sqrt(diag);
+  std::vector<std::uint32_t> bverts;
+  for (auto& f : bnd) bverts.insert(bverts.end(), f.begin(), f.end());
+  std::sort(bverts.begin(), bverts.end());
+  bverts.erase(std::unique(bverts.begin(), bverts.end()), bverts.end());
+  std::vector<double> vdist(bverts.size());
+  parallel_for(bverts.size(), [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t k = b; k < e; ++k) vdist[k] = query.distance(pts.p(bverts[k]));
+  }, 256);
+  {
+    std::ostringstream ex;
+    for (std::size_t k = 0; k < bverts.size(); ++k)
+      if (vdist[k] > kOnSurfaceDistance * diag && c.offsurface_vertices++ < kShow)
+        ex << " " << bverts[k] << " at " << xyz(pts.p(bverts[k])) << " (distance " << vdist[k] << ")";
+    if (c.offsurface_vertices)
+      c.failures.push_back(std::to_string(c.offsurface_vertices) +
+                           " boundary vertex(es) off the surface (> 1e-9 x bbox diagonal), e.g." + ex.str());
+  }
+
+  // ---- boundary faces within tolerance: 7 sample points per face, distance / h(centroid) ----
+  std::vector<double> fdist(bnd.size());
+  parallel_for(bnd.size(), [&](std::size_t b, std::size_t e, unsigned) {
+    static constexpr double kBary[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0.5, 0}, {0, 0.5, 0.5},
+                                           {0.5, 0, 0.5}, {2.0 / 3, 1.0 / 6, 1.0 / 6},
+                                           {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
+    for (std::size_t k = b; k < e; ++k) {
+      const double *p0 = pts.p(bnd[k][0]), *p1 = pts.p(bnd[k][1]), *p2 = pts.p(bnd[k][2]);
+      double worst = 0, cen[3];
+      for (int q = 0; q < 3; ++q) cen[q] = (p0[q] + p1[q] + p2[q]) / 3;
+      for (auto& w : kBary) {
+        double s[3];
+        for (int q = 0; q < 3; ++q) s[q] = w[0] * p0[q] + w[1] * p1[q] + w[2] * p2[q];
+        worst = std::max(worst, query.distance(s));
+      }
+      fdist[k] = worst / sizing(cen);
+    }
+  }, 256);
+  {
+    std::ostringstream ex;
+    for (std::size_t k = 0; k < bnd.size(); ++k) {
+      c.max_hausdorff = std::max(c.max_hausdorff, fdist[k]);
+      if (fdist[k] > options.hausdorff_tolerance && c.offsurface_faces++ < kShow) {
+        double cen[3];
+        for (int q = 0; q < 3; ++q) cen[q] = (pts.p(bnd[k][0])[q] + pts.p(bnd[k][1])[q] + pts.p(bnd[k][2])[q]) / 3;
+        ex << " face at " << xyz(cen) << " (" << fdist[k] << " h)";
+      }
+    }
+    if (c.offsurface_faces)
+      c.failures.push_back(std::to_string(c.offsurface_faces) + " boundary face(s) farther than " +
+                           std::to_string(options.hausdorff_tolerance) + " h from the surface, e.g." + ex.str());
+  }
+
+  // ---- open / non-manifold edges, non-manifold vertices ----
+  {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+    for (auto& f : bnd)
+      for (int j = 0; j < 3; ++j) edges.push_back(std::minmax(f[j], f[(j + 1) % 3]));
+    std::sort(edges.begin(), edges.end());
+    std::ostringstream ex;
+    for (std::size_t i = 0; i < edges.size();) {
+      std::size_t j = i;
+      while (j < edges.size() && edges[j] == edges[i]) ++j;
+      if (j - i != 2 && c.open_edges++ < kShow)
+        ex << " " << xyz(pts.p(edges[i].first)) << "-" << xyz(pts.p(edges[i].second)) << " in " << (j - i) << " face(s)";
+      i = j;
+    }
+    if (c.open_edges)
+      c.failures.push_back(std::to_string(c.open_edges) + " boundary edge(s) not in exactly two boundary faces, e.g." + ex.str());
+
+    // A vertex's faces form one fan iff they are connected through edges at the vertex.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> vf;
+    for (std::size_t k = 0; k < bnd.size(); ++k)
+      for (int j = 0; j < 3; ++j) vf.push_back({bnd[k][j], std::uint32_t(k)});
+    std::sort(vf.begin(), vf.end());
+    std::ostringstream vex;
+    std::vector<int> label;
+    for (std::size_t i = 0; i < vf.size();) {
+      std::size_t j = i;
+      while (j < vf.size() && vf[j].first == vf[i].first) ++j;
+      const std::uint32_t v = vf[i].first;
+      const std::size_t m = j - i;
+      label.assign(m, -1);
+      int fans = 0;
+      for (std::size_t s = 0; s < m; ++s) {
+        if (label[s] >= 0) continue;
+        label[s] = fans;
+        for (bool grew = true; grew;) {  // naive closure: m is small
+          grew = false;
+          for (std::size_t x = 0; x < m; ++x) {
+            if (label[x] != fans) continue;
+            for (std::size_t y = 0; y < m; ++y) {
+              if (label[y] >= 0) continue;
+              const auto& fx = bnd[vf[i + x].second];
+              const auto& fy = bnd[vf[i + y].second];
+              int shared = 0;  // vertices other than v in common
+              for (auto a : fx)
+                for (auto b : fy) shared += (a == b && a != v);
+              if (shared > 0) label[y] = fans, grew = true;
+            }
+          }
+        }
+        ++fans;
+      }
+      if (fans > 1 && c.nonmanifold_vertices++ < kShow)
+        vex << " " << v << " at " << xyz(pts.p(v)) << " (" << fans << " fans)";
+      i = j;
+    }
+    if (c.nonmanifold_vertices)
+      c.failures.push_back(std::to_string(c.nonmanifold_vertices) + " non-manifold boundary vertex(es), e.g." + vex.str());
+  }
+
+  // ---- volume ----
+  c.volume_error = surface.volume != 0 ? std::fabs(c.mesh_volume - surface.volume) / std::fabs(surface.volume)
+                                       : std::fabs(c.mesh_volume);
+  auto add_refine = [&](std::size_t k) {
+    for (int q = 0; q < 3; ++q)
+      c.refine_at.push_back((pts.p(bnd[k][0])[q] + pts.p(bnd[k][1])[q] + pts.p(bnd[k][2])[q]) / 3);
+  };
+  for (std::size_t k = 0; k < bnd.size(); ++k)
+    if (fdist[k] > options.hausdorff_tolerance) add_refine(k);
+  c.volume_off = !(c.volume_error <= options.volume_tolerance);
+  if (c.volume_off && !bnd.empty()) {
+    std::vector<std::uint32_t> order(bnd.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = std::uint32_t(k);
+    const std::size_t top = std::max<std::size_t>(1, bnd.size() / 50);
+    std::partial_sort(order.begin(), order.begin() + std::ptrdiff_t(top), order.end(),
+                      [&](std::uint32_t a, std::uint32_t b) { return fdist[a] != fdist[b] ? fdist[a] > fdist[b] : a < b; });
+    for (std::size_t k = 0; k < top; ++k)
+      if (!(fdist[order[k]] > options.hausdorff_tolerance)) add_refine(order[k]);
+  }
+  if (c.volume_off) {
+    std::ostringstream s;
+    s << "mesh volume " << c.mesh_volume << " differs from the solid's " << surface.volume << " by "
+      << c.volume_error * 100 << "% (tolerance " << options.volume_tolerance * 100 << "%)";
+    c.failures.push_back(s.str());
+  }
+  if (nt == 0) c.failures.push_back("the mesh has no tets");
+  return c;
+}
+
+}  // namespace kdmesh

@@ -1,0 +1,339 @@
+// kdmesh — SurfaceQuery: CGAL AABB tree adapter (CGAL types stay in this file), with the exact
+// segment-parity inside/outside test (ray_parity::side).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/surface/surface_query.h"
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "core/rng.h"
+
+namespace kdmesh::ray_parity {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Triangles = std::vector<K::Triangle_3>;
+using Primitive = CGAL::AABB_triangle_primitive<K, Triangles::const_iterator>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+
+namespace {
+
+using Point = K::Point_3;
+using Point2 = K::Point_2;
+
+/// p, coplanar with the non-degenerate triangle abc, lies in the closed triangle: the three
+/// edge orientations in a projection where abc stays a triangle (an affine bijection of the
+/// plane, so containment is preserved; the projected coordinates are the input doubles).
+bool in_closed_triangle(const Point& a, const Point& b, const Point& c, const Point& p) {
+  for (int drop = 0; drop < 3; ++drop) {
+    auto pr = [drop](const Point& q) {
+      return drop == 0 ? Point2(q.y(), q.z()) : drop == 1 ? Point2(q.x(), q.z()) : Point2(q.x(), q.y());
+    };
+    const CGAL::Orientation o = CGAL::orientation(pr(a), pr(b), pr(c));
+    if (o == CGAL::COLLINEAR) continue;
+    return CGAL::orientation(pr(a), pr(b), pr(p)) != -o && CGAL::orientation(pr(b), pr(c), pr(p)) != -o &&
+           CGAL::orientation(pr(c), pr(a), pr(p)) != -o;
+  }
+  return false;  // a degenerate facet (prepared surfaces have none) holds no area
+}
+
+enum class Meet { none, cross, on_facet, degenerate };
+
+/// How the segment pq, with q strictly outside the surface's bounding box, meets triangle t.
+Meet meet(const K::Triangle_3& t, const Point& p, const Point& q) {
+  const Point &a = t[0], &b = t[1], &c = t[2];
+  const CGAL::Orientation op = CGAL::orientation(a, b, c, p);
+  if (op == CGAL::COPLANAR && in_closed_triangle(a, b, c, p)) return Meet::on_facet;
+  const CGAL::Orientation oq = CGAL::orientation(a, b, c, q);
+  // q is outside the box, so not on the facet: pq meets the plane at q alone, or lies in it.
+  if (oq == CGAL::COPLANAR) return op == CGAL::COPLANAR ? Meet::degenerate : Meet::none;
+  if (op == CGAL::COPLANAR || op == oq) return Meet::none;  // p off the facet, or one side
+  // pq crosses the plane; it crosses the facet iff the line pq passes each edge on one side.
+  const CGAL::Orientation s[3] = {CGAL::orientation(p, q, a, b), CGAL::orientation(p, q, b, c),
+                                  CGAL::orientation(p, q, c, a)};
+  bool pos = false, neg = false, zero = false;
+  for (const CGAL::Orientation o : s) {
+    pos = pos || o == CGAL::POSITIVE;
+    neg = neg || o == CGAL::NEGATIVE;
+    zero = zero || o == CGAL::COPLANAR;
+  }
+  if (pos && neg) return Meet::none;
+  return zero ? Meet::degenerate : Meet::cross;  // zero: through an edge or a vertex
+}
+
+/// AABB traversal counting the crossings of segment pq; stops at a facet holding p or a
+/// degenerate meeting.
+struct Crossings {
+  Point p, q;
+  bool vertical;  // q = (p.x, p.y, z): boxes are tested by exact comparisons alone
+  std::size_t count = 0;
+  Meet stop = Meet::none;
+
+  bool go_further() const { return stop == Meet::none; }
+  bool box_meets(const CGAL::Bbox_3& b) const {
+    if (vertical)
+      return p.x() >= b.xmin() && p.x() <= b.xmax() && p.y() >= b.ymin() && p.y() <= b.ymax() &&
+             std::max(p.z(), q.z()) >= b.zmin() && std::min(p.z(), q.z()) <= b.zmax();
+    return K().do_intersect_3_object()(K::Segment_3(p, q), b);  // filtered exact
+  }
+  template <class Query>
+  void intersection(const Query&, const Primitive& primitive) {
+    const K::Triangle_3& t = primitive.datum();
+    if (!box_meets(t.bbox())) return;
+    switch (meet(t, p, q)) {
+      case Meet::cross: ++count; break;
+      case Meet::none: break;
+      case Meet::on_facet: stop = Meet::on_facet; break;
+      case Meet::degenerate: stop = Meet::degenerate; break;
+    }
+  }
+  template <class Query, class Node>
+  bool do_intersect(const Query&, const Node& node) const {
+    return box_meets(node.bbox());
+  }
+};
+
+bool outside_box(const Point& q, const CGAL::Bbox_3& b) {
+  return q.x() < b.xmin() || q.x() > b.xmax() || q.y() < b.ymin() || q.y() > b.ymax() || q.z() < b.zmin() ||
+         q.z() > b.zmax();
+}
+
+}  // namespace
+
+/// +1 strictly inside the closed surface held by `tree` (nested shells: odd parity), -1
+/// strictly outside, 0 on a facet (closed).
+///
+/// Why not CGAL's Point_inside_vertical_ray_cast (used up to issue 19): its rays are
+/// p + (0, 0, +-1) and, where that ray grazes an edge, p + a random unit vector, and CGAL's
+/// ray-triangle test then builds a + (q - p) at a facet vertex a
+/// (Intersections_3/internal/Ray_3_Triangle_3_do_intersect.h:231) in double precision. A
+/// direction of absolute length 1 is rounded to ulp(|x|) = 2^(e-52) there: from |x| = 2^52
+/// (ulp 1, a half-unit step ties back to a) the direction is lost, a crossing missed and the
+/// side wrong (a cube of side 2^52 answered "outside" at its centre), and from 2^53 even the
+/// vertical ray is degenerate (z + 1 == z). Here the segment runs from p to a point q beyond
+/// the bounding box, q is never derived from a unit vector, and every decision is an exact
+/// orientation sign of the input doubles p, q and the facet vertices, so the answer is exact
+/// and the same at every scale.
+int side(const Tree& tree, const double* pp) {
+  const Point p(pp[0], pp[1], pp[2]);
+  const CGAL::Bbox_3 box = tree.bbox();
+  if (tree.empty() || outside_box(p, box)) return -1;
+  // First a vertical segment to just beyond the nearer of the box's z faces (like CGAL's cast:
+  // fewer boxes to visit), then, while a segment grazes an edge or a vertex or lies in a
+  // facet's plane, segments in seeded random directions to a point beyond the box.
+  const bool down = p.z() - box.zmin() < box.zmax() - p.z();
+  const double z = down ? std::nextafter(box.zmin(), -std::numeric_limits<double>::infinity())
+                        : std::nextafter(box.zmax(), std::numeric_limits<double>::infinity());
+  Crossings c{p, Point(p.x(), p.y(), z), true};
+  tree.traversal(K::Segment_3(c.p, c.q), c);
+  const double span = std::max({box.xmax() - box.xmin(), box.ymax() - box.ymin(), box.zmax() - box.zmin()});
+  Rng rng(0x9a17c0ffee5eedULL);
+  for (int attempt = 0; c.stop == Meet::degenerate; ++attempt) {
+    if (attempt == 1000)
+      throw GeometryError("inside/outside test: 1000 random segments from (" + std::to_string(pp[0]) + ", " +
+                          std::to_string(pp[1]) + ", " + std::to_string(pp[2]) + ") all graze an edge");
+    double u[3], n2 = 0;
+    do {  // uniform on the sphere: rejection from the cube
+      n2 = 0;
+      for (double& x : u) {
+        x = rng.uniform(-1, 1);
+        n2 += x * x;
+      }
+    } while (!(n2 > 1e-4 && n2 <= 1));
+    // Length 2 x span per unit of u: beyond the box whatever p's place in it (doubled again
+    // if rounding kept q inside); only q's side of the box matters, not its exact place.
+    double len = 2 * span / std::sqrt(n2);
+    Point q;
+    for (;;) {
+      q = Point(pp[0] + len * u[0], pp[1] + len * u[1], pp[2] + len * u[2]);
+      if (outside_box(q, box)) break;
+      len *= 2;
+    }
+    c = Crossings{p, q, false};
+    tree.traversal(K::Segment_3(c.p, c.q), c);
+  }
+  if (c.stop == Meet::on_facet) return 0;
+  return c.count % 2 == 1 ? 1 : -1;
+}
+
+}  // namespace kdmesh::ray_parity
+
+namespace kdmesh {
+
+namespace {
+using K = ray_parity::K;
+using Triangles = ray_parity::Triangles;
+using Primitive = ray_parity::Primitive;
+using Tree = ray_parity::Tree;
+}  // namespace
+
+/// Facet bounding boxes binned on a uniform grid: which facets a small box may touch, with
+/// exact comparisons only (cell indices are a monotone function of a coordinate, so a facet
+/// box and a query box that overlap share a cell).
+class BoxGrid {
+ public:
+  void build(const Triangles& tris) {
+    for (int k = 0; k < 3; ++k) lo_[k] = hi_[k] = tris[0].vertex(0)[k];
+    boxes_.resize(tris.size());
+    for (std::size_t f = 0; f < tris.size(); ++f) {
+      std::array<double, 6>& b = boxes_[f];
+      for (int k = 0; k < 3; ++k) {
+        b[k] = std::min({tris[f].vertex(0)[k], tris[f].vertex(1)[k], tris[f].vertex(2)[k]});
+        b[3 + k] = std::max({tris[f].vertex(0)[k], tris[f].vertex(1)[k], tris[f].vertex(2)[k]});
+        lo_[k] = std::min(lo_[k], b[k]);
+        hi_[k] = std::max(hi_[k], b[3 + k]);
+      }
+    }
+    // About 4 cells per facet, cubic cells, at most 128 per axis.
+    const double ext[3] = {hi_[0] - lo_[0], hi_[1] - lo_[1], hi_[2] - lo_[2]};
+    const double vol = std::max(ext[0], 1e-300) * std::max(ext[1], 1e-300) * std::max(ext[2], 1e-300);
+    const double cell = std::cbrt(vol / (4.0 * double(tris.size())));
+    for (int k = 0; k < 3; ++k) {
+      n_[k] = int(std::clamp(ext[k] / cell, 1.0, 128.0));
+      inv_[k] = ext[k] > 0 ? double(n_[k]) / ext[k] : 0;
+    }
+    std::vector<std::uint32_t> count(std::size_t(n_[0]) * n_[1] * n_[2] + 1, 0);
+    auto each_cell = [&](const double* b, auto&& f) {
+      int a[3], z[3];
+      for (int k = 0; k < 3; ++k) a[k] = index(k, b[k]), z[k] = index(k, b[3 + k]);
+      for (int i = a[0]; i <= z[0]; ++i)
+        for (int j = a[1]; j <= z[1]; ++j)
+          for (int l = a[2]; l <= z[2]; ++l) f((std::size_t(l) * n_[1] + j) * n_[0] + i);
+    };
+    for (const auto& b : boxes_) each_cell(b.data(), [&](std::size_t c) { ++count[c + 1]; });
+    for (std::size_t c = 1; c < count.size(); ++c) count[c] += count[c - 1];
+    start_ = count;
+    items_.resize(count.back());
+    for (std::uint32_t f = 0; f < boxes_.size(); ++f)
+      each_cell(boxes_[f].data(), [&](std::size_t c) { items_[count[c]++] = f; });
+  }
+  /// False when no facet's (closed) box meets the closed box [a, b] (per axis a <= b).
+  bool may_touch(const double* a, const double* b) const {
+    int ia[3], ib[3];
+    for (int k = 0; k < 3; ++k) {
+      if (b[k] < lo_[k] || a[k] > hi_[k]) return false;
+      ia[k] = index(k, a[k]), ib[k] = index(k, b[k]);
+    }
+    for (int i = ia[0]; i <= ib[0]; ++i)
+      for (int j = ia[1]; j <= ib[1]; ++j)
+        for (int l = ia[2]; l <= ib[2]; ++l) {
+          const std::size_t c = (std::size_t(l) * n_[1] + j) * n_[0] + i;
+          for (std::uint32_t x = start_[c]; x < start_[c + 1]; ++x) {
+            const std::array<double, 6>& f = boxes_[items_[x]];
+            if (f[0] <= b[0] && a[0] <= f[3] && f[1] <= b[1] && a[1] <= f[4] && f[2] <= b[2] &&
+                a[2] <= f[5])
+              return true;
+          }
+        }
+    return false;
+  }
+
+ private:
+  int index(int k, double x) const {
+    return std::clamp(int(std::floor((x - lo_[k]) * inv_[k])), 0, n_[k] - 1);
+  }
+  double lo_[3], hi_[3], inv_[3];
+  int n_[3];
+  std::vector<std::array<double, 6>> boxes_;
+  std::vector<std::uint32_t> start_, items_;
+};
+
+struct SurfaceQuery::Impl {
+  Triangles triangles;
+  Tree tree;
+  BoxGrid boxes;
+  double magnitude = 0;  // largest |coordinate| of the surface
+};
+
+SurfaceQuery::SurfaceQuery(const SurfaceMesh& surface) : impl_(std::make_unique<Impl>()) {
+  if (surface.num_tris() == 0) throw GeometryError("surface query: the surface has no facets");
+  auto P = [&](std::uint32_t v) {
+    const double* p = surface.points.p(v);
+    return K::Point_3(p[0], p[1], p[2]);
+  };
+  impl_->triangles.reserve(surface.num_tris());
+  for (std::size_t f = 0; f < surface.num_tris(); ++f) {
+    const std::uint32_t* t = surface.tri(f);
+    impl_->triangles.emplace_back(P(t[0]), P(t[1]), P(t[2]));
+  }
+  impl_->tree.insert(impl_->triangles.cbegin(), impl_->triangles.cend());
+  impl_->tree.build();
+  impl_->tree.accelerate_distance_queries();
+  impl_->boxes.build(impl_->triangles);
+  for (const double x : surface.points.xyz) impl_->magnitude = std::max(impl_->magnitude, std::fabs(x));
+}
+
+SurfaceQuery::~SurfaceQuery() = default;
+
+int SurfaceQuery::side(const double* p) const {
+  // Parity of a segment's crossings, exact at any magnitude: ray_parity::side above.
+  return ray_parity::side(impl_->tree, p);
+}
+
+double SurfaceQuery::closest(const double* p, double* out, std::uint32_t* facet) const {
+  const K::Point_3 q(p[0], p[1], p[2]);
+  const auto [c, id] = impl_->tree.closest_point_and_primitive(q);
+  out[0] = c.x();
+  out[1] = c.y();
+  out[2] = c.z();
+  if (facet) *facet = std::uint32_t(id - impl_->triangles.cbegin());
+  return std::sqrt(CGAL::squared_distance(q, c));
+}
+
+bool SurfaceQuery::box_may_touch(const double* a, const double* b) const {
+  double lo[3], hi[3];
+  for (int k = 0; k < 3; ++k) lo[k] = std::min(a[k], b[k]), hi[k] = std::max(a[k], b[k]);
+  return impl_->boxes.may_touch(lo, hi);
+}
+
+double SurfaceQuery::ray_distance(const double* origin, const double* dir, std::uint32_t skip,
+                                  std::uint32_t* hit_facet) const {
+  if (hit_facet) *hit_facet = kNoFacet;
+  const K::Point_3 o(origin[0], origin[1], origin[2]);
+  // The ray stores o + d, and CGAL's ray-triangle code rebuilds the direction at a facet
+  // vertex a as a + ((o + d) - o): each sum is rounded to ulp(|x|) = 2^(e-52) of the
+  // coordinates, so a direction of fixed length (the callers' unit normals) loses all its bits
+  // from |x| = 2^53 (a degenerate ray: CGAL assertion) and is bent well before. Scaled by a
+  // power of two (exact, undone on t below) to at least the coordinates' magnitude, d keeps
+  // its direction to a relative 2^-52 at every scale.
+  const double dmax = std::max({std::fabs(dir[0]), std::fabs(dir[1]), std::fabs(dir[2])});
+  if (!(dmax > 0) || !std::isfinite(dmax)) return std::numeric_limits<double>::infinity();
+  const double reach = std::max({impl_->magnitude, std::fabs(origin[0]), std::fabs(origin[1]), std::fabs(origin[2])});
+  const int shift = reach > 0 ? std::ilogb(reach) + 1 - std::ilogb(dmax) : 0;
+  const K::Vector_3 d(std::ldexp(dir[0], shift), std::ldexp(dir[1], shift), std::ldexp(dir[2], shift));
+  const double dd = d.squared_length();
+  if (!(dd > 0) || !std::isfinite(dd)) return std::numeric_limits<double>::infinity();
+  const auto begin = impl_->triangles.cbegin();
+  const auto hit = impl_->tree.first_intersection(
+      K::Ray_3(o, d), [&](const Primitive::Id& id) { return std::uint32_t(id - begin) == skip; });
+  if (!hit) return std::numeric_limits<double>::infinity();
+  double t = std::numeric_limits<double>::infinity();
+  if (hit_facet) *hit_facet = std::uint32_t(hit->second - begin);
+  if (const K::Point_3* p = boost::get<K::Point_3>(&hit->first)) {
+    t = std::sqrt(CGAL::squared_distance(o, *p) / dd);
+  } else if (const K::Segment_3* sgm = boost::get<K::Segment_3>(&hit->first)) {
+    t = std::sqrt(std::min(CGAL::squared_distance(o, sgm->source()), CGAL::squared_distance(o, sgm->target())) / dd);
+  }
+  return std::ldexp(t, shift);  // in units of |dir|
+}
+
+double SurfaceQuery::distance(const double* p) const {
+  const K::Point_3 q(p[0], p[1], p[2]);
+  return std::sqrt(impl_->tree.squared_distance(q));
+}
+
+double SurfaceQuery::distance(const double* p, const double* hint) const {
+  const K::Point_3 q(p[0], p[1], p[2]), h(hint[0], hint[1], hint[2]);
+  return std::sqrt(impl_->tree.squared_distance(q, h));
+}
+
+}  // namespace kdmesh

@@ -1,0 +1,804 @@
+// kdmesh — volume mesher: Delaunay of the nodes, keep the tets inside the solid, recover the
+// boundary with surface Steiner points, label regions (NodeSet -> VolumeMesh).
+//
+// Per round: order + Delaunay of the current nodes; classify every finite tet inside/outside;
+// extract the boundary faces (inside tet against outside or infinite tet), judge them (an
+// interior-kind vertex, too far from the surface, or facing against the closest facet), and
+// check the boundary is a closed 2-manifold. If anything is wrong, drop the offending interior
+// nodes, add Steiner points on the surface and start the next round.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/volume/volume_mesh.h"
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <memory>
+#include <numeric>
+#include <sstream>
+#include <unordered_map>
+
+#include "core/error.h"
+#include "core/timer.h"
+#include "mesher/volume/boundary_faces.h"
+#include "mesher/surface/crease_points.h"
+#include "mesher/parallel_for.h"
+#include "mesher/quality/quality.h"
+
+namespace kdmesh {
+
+namespace {
+
+constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+
+// ---------------------------------------------------------------------------------------------
+// Full triangulation of the current node set: the first round, and rounds after interior nodes
+// were dropped. Rounds that only add Steiner points insert them into the existing triangulation
+// (delaunay_insert, located from a vertex of the face that asked for them).
+DelaunayResult triangulate(const NodeSet& nodes, const VolumeMeshOptions& options,
+                           VolumeMeshStats& stats) {
+  Stopwatch sw;
+  const Ordering order = make_order(nodes.points, options.order);
+  stats.order_seconds += sw.seconds();
+  sw.reset();
+  DelaunayOptions dopt;
+  if (options.progress) dopt.progress = [&](double f) { options.progress("delaunay", f); };
+  DelaunayResult r = delaunay(nodes.points, order, dopt);
+  stats.delaunay_seconds += sw.seconds();
+  return r;
+}
+
+/// True if the tet (4 point ids at v) is flat at rounding level (mesher/quality/quality.h).
+bool flat_at_rounding(const PointSet& pts, const std::uint32_t* v) {
+  return std::abs(volume_length(pts.p(v[0]), pts.p(v[1]), pts.p(v[2]), pts.p(v[3]))) <
+         kZeroVolumeLength;
+}
+
+void centroid4(const PointSet& pts, const std::uint32_t* v, double* c) {
+  for (int k = 0; k < 3; ++k)
+    c[k] = (pts.p(v[0])[k] + pts.p(v[1])[k] + pts.p(v[2])[k] + pts.p(v[3])[k]) / 4;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Inside/outside classification of every tet of `tri` (infinite tets: outside). A centroid on
+// the surface (side 0) counts as outside.
+//
+// A face with an interior-kind vertex cannot be a boundary face of a valid mesh, so the tets
+// joined across such faces form components that share one class. Interior nodes lie strictly
+// inside the solid, so each such component is taken to be inside, and only its rim is checked:
+//  1. tets whose four vertices are all surface nodes get their own exact query;
+//  2. every other tet next to a tet of the other class (it would own a boundary face) gets its
+//     own query; a tet whose answer contradicts its component flips and exposes its unchecked
+//     neighbours to the next wave, so a component that is really outside (or a tet that sticks
+//     out of the solid because its interior vertex is too close to the surface) is corrected
+//     tet by tet from its rim inwards.
+// Every tet that ends up owning a boundary face, on either side, has had its own exact query;
+// the components themselves are never materialised (no flood fill over all tets).
+std::vector<std::uint8_t> classify(const Triangulation& tri, const NodeSet& nodes,
+                                   const SurfaceQuery& query, double on_surface,
+                                   VolumeMeshStats& stats) {
+  const std::size_t n = tri.num_tets();
+  // 0 outside / infinite, 1 inside; bit 1: class verified by the tet's own query.
+  std::vector<std::uint8_t> inside(n, 0), verified(n, 0);
+  std::vector<std::uint32_t> singles;  // all-surface tets
+  parallel_for(n, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t t = b; t < e; ++t) {
+      bool infinite = false, interior = false;
+      for (int i = 0; i < 4; ++i) {
+        const std::uint32_t v = tri.v(t, i);
+        if (v == kInfiniteVertex) infinite = true;
+        else if (nodes.kind[v] == NodeKind::interior) interior = true;
+      }
+      inside[t] = !infinite && interior;
+      verified[t] = infinite;  // infinite tets are outside by definition
+    }
+  });
+  for (std::size_t t = 0; t < n; ++t)
+    if (!verified[t] && !inside[t]) singles.push_back(std::uint32_t(t));
+
+  auto side_of = [&](std::uint32_t t) {
+    const std::uint32_t* v = &tri.data[8 * std::size_t(t)];
+    bool all_surface = true;
+    for (int i = 0; i < 4; ++i) all_surface = all_surface && nodes.kind[v[i]] != NodeKind::interior;
+    if (all_surface && flat_at_rounding(nodes.points, v)) return false;  // see below
+    double c[3];
+    centroid4(nodes.points, v, c);
+    return query.side(c) > 0;
+  };
+  // An all-surface tet whose centroid lies on the surface (within `on_surface`, the distance
+  // at which mesh_check counts a vertex as on the surface) is a flat sliver between surface
+  // nodes that are coplanar only up to rounding: it is outside, like a centroid exactly on the
+  // surface. Deciding such slivers by the sign of a 1e-17 offset would make the boundary zigzag
+  // through the sheet of surface nodes (flipped faces, non-manifold edges). Likewise an
+  // all-surface tet that is flat at rounding level (volume-length ratio < 1e-9; measured on
+  // the gear box: 23 tets with radius ratio ~1e-16, two edge and two surface nodes on one
+  // facet plane, whose centroid lay beyond `on_surface` from the facet polygon) is a zero-volume
+  // sliver on the surface, never a part of the solid: dropping it exposes faces on the surface.
+  std::size_t queries = singles.size();
+  for (std::uint32_t t : singles) verified[t] = 1;
+  parallel_for(singles.size(), [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t k = b; k < e; ++k) {
+      const std::uint32_t t = singles[k];
+      double c[3];
+      centroid4(nodes.points, &tri.data[8 * std::size_t(t)], c);
+      inside[t] = !flat_at_rounding(nodes.points, &tri.data[8 * std::size_t(t)]) &&
+                          query.side(c) > 0 && query.distance(c) > on_surface
+                      ? 1
+                      : 0;
+    }
+  }, 256);
+
+  // The rim of the components, then waves of flips.
+  std::vector<std::uint32_t> wave;
+  {
+    std::vector<std::vector<std::uint32_t>> part(64);
+    parallel_for(n, [&](std::size_t b, std::size_t e, unsigned w) {
+      for (std::size_t t = b; t < e; ++t) {
+        if (verified[t]) continue;
+        for (int i = 0; i < 4; ++i)
+          if (inside[tri.adj(t, i) >> 2] != inside[t]) {
+            part[w].push_back(std::uint32_t(t));
+            break;
+          }
+      }
+    }, 65536, 64);
+    for (auto& p : part) wave.insert(wave.end(), p.begin(), p.end());
+  }
+  std::vector<std::uint8_t> answer;
+  while (!wave.empty()) {
+    for (std::uint32_t t : wave) verified[t] = 1;
+    answer.assign(wave.size(), 0);
+    parallel_for(wave.size(), [&](std::size_t b, std::size_t e, unsigned) {
+      for (std::size_t k = b; k < e; ++k) answer[k] = side_of(wave[k]) ? 1 : 0;
+    }, 256);
+    queries += wave.size();
+    std::vector<std::uint32_t> next;
+    for (std::size_t k = 0; k < wave.size(); ++k) {
+      const std::uint32_t t = wave[k];
+      if (answer[k] == inside[t]) continue;
+      inside[t] = answer[k];
+      ++stats.rim_flips;
+      for (int i = 0; i < 4; ++i) {
+        const std::uint32_t u = tri.adj(t, i) >> 2;
+        if (!verified[u]) {
+          verified[u] = 1;  // queued once
+          next.push_back(u);
+        }
+      }
+    }
+    wave.swap(next);
+  }
+  stats.side_queries += queries;
+  stats.classified_tets += n;
+  return inside;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Folds. A tet whose four vertices are surface nodes is classified by the side of its centroid
+// alone. Where the surface bends or wiggles within one node spacing (the saddle-shaped inner
+// half of a torus near the top and bottom of the tube; rough scanned surfaces) such tets lie
+// across the surface, their centroids within the surface's own deviation from their faces, so
+// neighbouring ones fall on either side: the boundary folds, and the fold's faces point into the
+// solid (judge_boundary: "faces against the closest facet") or meet at non-manifold edges and
+// vertices. Steiner points do not undo a fold: its faces are caps (three surface nodes nearly
+// in a row), the closest surface point to such a face lies next to the middle node, so no
+// candidate is admissible, and every surface node added makes more tets of the same kind
+// (measured on a 400x200-quad torus at size 1: 188 folded faces before the first Steiner round,
+// 76 still there when no admissible point was left after 11 rounds; a rough one: 3734, 4134
+// after 12 rounds).
+//
+// A fold is undone by taking all-surface tets out of the solid (never by adding one: every kept
+// tet keeps its centroid strictly inside). Starting from an all-surface tet that owns a bad face
+// or a face at a non-manifold vertex, the cluster grows through every bad face it exposes and
+// through the all-surface tets at the non-manifold vertices it leaves, up to kMaxCluster tets;
+// a tet with an interior-kind vertex behind a bad exposed face stops it. The cluster is kept if
+// every face it exposes is good (judge_face: on the surface within tolerance, facing out) and
+// its vertices have fewer non-manifold ones than before (no more, if it started from a bad
+// face, which is gone); else it is undone. Sequential in tet order (deterministic); tets next to
+// a kept cluster are retried until nothing changes. Returns the number of tets taken out.
+std::size_t peel_folds(const Triangulation& tri, const NodeSet& nodes, const PreparedSurface& surface,
+                       const SurfaceQuery& query, const SizingField& sizing, double tolerance,
+                       const BoundaryFaces& bf, const BoundaryJudgement& judge,
+                       std::vector<std::uint8_t>& inside) {
+  const std::size_t n = tri.num_tets();
+  auto all_surface = [&](std::uint32_t t) {
+    for (int i = 0; i < 4; ++i)
+      if (nodes.kind[tri.v(t, i)] == NodeKind::interior) return false;
+    return true;
+  };
+  auto face_verts = [&](std::uint32_t t, int i, std::uint32_t* fv) {
+    for (int j = 0; j < 3; ++j) fv[j] = tri.v(t, kTetFace[i][j]);
+  };
+  auto bad_face = [&](std::uint32_t t, int i) {
+    std::uint32_t fv[3];
+    face_verts(t, i, fv);
+    return judge_face(fv, nodes, surface, query, sizing, tolerance) != 0;
+  };
+  // Candidates: the all-surface tets owning a bad face or a face at a non-manifold edge or
+  // vertex.
+  std::vector<std::uint32_t> work;
+  for (const std::vector<std::uint32_t>* list :
+       {&judge.bad_faces, &judge.faces_at_bad_edges, &judge.faces_at_bad_vertices})
+    for (std::uint32_t f : *list)
+      if (all_surface(bf.tet[f])) work.push_back(bf.tet[f]);
+  if (work.empty()) return 0;
+  // The boundary faces at each vertex (face reference 4 t + i of the inside tet), kept up to
+  // date while peeling, for the manifold test.
+  std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> at_vertex;
+  auto count_face = [&](std::uint32_t ref, int d) {
+    std::uint32_t fv[3];
+    face_verts(ref >> 2, int(ref & 3), fv);
+    for (std::uint32_t v : fv) {
+      std::vector<std::uint32_t>& l = at_vertex[v];
+      if (d > 0) {
+        l.push_back(ref);
+      } else {
+        auto it = std::find(l.begin(), l.end(), ref);
+        *it = l.back();
+        l.pop_back();
+      }
+    }
+  };
+  for (std::size_t t = 0; t < n; ++t) {
+    if (!inside[t]) continue;
+    for (int i = 0; i < 4; ++i)
+      if (!inside[tri.adj(t, i) >> 2]) count_face(std::uint32_t(4 * t + i), 1);
+  }
+  // The boundary is a 2-manifold at v: the edges opposite v in its faces form one cycle.
+  std::vector<std::uint32_t> link;
+  auto manifold_at = [&](std::uint32_t v) {
+    auto it = at_vertex.find(v);
+    if (it == at_vertex.end() || it->second.empty()) return true;
+    link.clear();
+    for (std::uint32_t ref : it->second) {
+      std::uint32_t fv[3];
+      face_verts(ref >> 2, int(ref & 3), fv);
+      const int j = fv[0] == v ? 0 : fv[1] == v ? 1 : 2;
+      link.push_back(fv[(j + 1) % 3]);  // directed link edge
+      link.push_back(fv[(j + 2) % 3]);
+    }
+    // One cycle: each link vertex starts exactly one edge and ends exactly one, and walking
+    // from the first edge visits them all.
+    const std::size_t m = link.size() / 2;
+    for (std::size_t a = 0; a < m; ++a) {
+      int starts = 0, ends = 0;
+      for (std::size_t b = 0; b < m; ++b) {
+        starts += link[2 * b] == link[2 * a];
+        ends += link[2 * b + 1] == link[2 * a];
+      }
+      if (starts != 1 || ends != 1) return false;
+    }
+    std::size_t steps = 0, e = 0;
+    do {
+      std::size_t b = 0;
+      while (link[2 * b] != link[2 * e + 1]) ++b;
+      e = b;
+      ++steps;
+    } while (e != 0 && steps <= m);
+    return steps == m;
+  };
+  auto peel_one = [&](std::uint32_t t, int d) {  // d = -1 peel, +1 undo
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t a = tri.adj(t, i);
+      if (!inside[a >> 2]) count_face(std::uint32_t(4 * t + i), d);
+      else count_face(a, -d);
+    }
+    inside[t] = d < 0 ? 0 : 1;
+  };
+  // Peels the all-surface tet t0 and, where that exposes a bad face of another all-surface tet
+  // (a fold more than one tet thick) or leaves a vertex non-manifold, the all-surface tets there
+  // too, up to kMaxCluster tets. Kept if every face it exposes is good and its vertices have
+  // fewer non-manifold ones than before (no more, if t0 owned a bad face: that face is gone);
+  // otherwise undone.
+  constexpr std::size_t kMaxCluster = 24;
+  std::vector<std::uint32_t> removed, stack;
+  std::vector<std::pair<std::uint32_t, bool>> was_manifold;  // vertices touched, before
+  auto touch = [&](std::uint32_t t) {
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t v = tri.v(t, i);
+      bool seen = false;
+      for (const auto& p : was_manifold) seen = seen || p.first == v;
+      if (!seen) was_manifold.push_back({v, manifold_at(v)});
+    }
+  };
+  auto try_peel = [&](std::uint32_t t0, bool owns_bad) {
+    removed.clear();
+    was_manifold.clear();
+    stack.assign(1, t0);
+    for (;;) {
+      bool ok = true;
+      while (ok && !stack.empty()) {
+        const std::uint32_t t = stack.back();
+        stack.pop_back();
+        if (!inside[t]) continue;
+        if (removed.size() == kMaxCluster) {
+          ok = false;
+          break;
+        }
+        touch(t);
+        peel_one(t, -1);
+        removed.push_back(t);
+        for (int i = 0; i < 4 && ok; ++i) {
+          const std::uint32_t a = tri.adj(t, i);
+          if (!inside[a >> 2] || !bad_face(a >> 2, int(a & 3))) continue;
+          ok = all_surface(a >> 2);  // a bad face of a tet that cannot be peeled
+          stack.push_back(a >> 2);
+        }
+      }
+      if (!ok) break;
+      std::size_t before = 0, after = 0;
+      for (const auto& [v, m] : was_manifold) {
+        before += !m;
+        after += !manifold_at(v);
+      }
+      if (owns_bad ? after <= before : after < before) return true;
+      for (const auto& [v, m] : was_manifold) {
+        if (manifold_at(v)) continue;
+        for (std::uint32_t ref : at_vertex[v])
+          if (all_surface(ref >> 2)) stack.push_back(ref >> 2);
+      }
+      if (stack.empty()) break;
+    }
+    for (std::size_t r = removed.size(); r-- > 0;) peel_one(removed[r], +1);
+    return false;
+  };
+  std::size_t peeled = 0;
+  while (!work.empty()) {
+    std::sort(work.begin(), work.end());
+    work.erase(std::unique(work.begin(), work.end()), work.end());
+    std::vector<std::uint32_t> next;
+    for (std::uint32_t t : work) {
+      if (!inside[t]) continue;
+      bool has_bad = false, at_defect = false;
+      for (int i = 0; i < 4 && !has_bad; ++i)
+        if (!inside[tri.adj(t, i) >> 2]) {
+          has_bad = bad_face(t, i);
+          for (int j = 0; j < 3 && !at_defect; ++j) at_defect = !manifold_at(tri.v(t, kTetFace[i][j]));
+        }
+      if (!(has_bad || at_defect) || !try_peel(t, has_bad)) continue;
+      peeled += removed.size();
+      for (std::uint32_t r : removed)
+        for (int i = 0; i < 4; ++i) {
+          const std::uint32_t u = tri.adj(r, i) >> 2;
+          if (inside[u] && all_surface(u)) next.push_back(u);  // may be peelable now
+        }
+    }
+    work.swap(next);
+  }
+  return peeled;
+}
+
+// ---------------------------------------------------------------------------------------------
+// A hash grid of points for "is there a node within r of p".
+class PointGrid {
+ public:
+  PointGrid(double cell, const double* origin) : cell_(cell) {
+    for (int k = 0; k < 3; ++k) origin_[k] = origin[k];
+  }
+  void add(const double* p) {
+    pts_.insert(pts_.end(), p, p + 3);
+    cells_[key(cell_of(p))].push_back(std::uint32_t(pts_.size() / 3 - 1));
+  }
+  bool any_within(const double* p, double r) const {
+    const auto c = cell_of(p);
+    const double span = std::ceil(r / cell_);
+    if (span > 8 && (2 * span + 1) * (2 * span + 1) * (2 * span + 1) > double(cells_.size())) {
+      for (std::size_t i = 0; i < pts_.size(); i += 3) {  // cheaper than visiting that many cells
+        const double* q = &pts_[i];
+        if ((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]) < r * r)
+          return true;
+      }
+      return false;
+    }
+    const int k = std::max(1, int(span));
+    for (int dx = -k; dx <= k; ++dx)
+      for (int dy = -k; dy <= k; ++dy)
+        for (int dz = -k; dz <= k; ++dz) {
+          auto it = cells_.find(key({c[0] + dx, c[1] + dy, c[2] + dz}));
+          if (it == cells_.end()) continue;
+          for (std::uint32_t i : it->second) {
+            const double* q = &pts_[3 * std::size_t(i)];
+            const double d2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                              (p[2] - q[2]) * (p[2] - q[2]);
+            if (d2 < r * r) return true;
+          }
+        }
+    return false;
+  }
+
+ private:
+  std::array<std::int64_t, 3> cell_of(const double* p) const {
+    std::array<std::int64_t, 3> c{};
+    for (int k = 0; k < 3; ++k) c[k] = std::int64_t(std::floor((p[k] - origin_[k]) / cell_));
+    return c;
+  }
+  static std::uint64_t key(std::array<std::int64_t, 3> c) {
+    std::uint64_t h = 0x9E3779B97F4A7C15ULL;
+    for (std::int64_t x : c) h = (h ^ std::uint64_t(x)) * 0xFF51AFD7ED558CCDULL + 0x632BE59BD9B4E5F5ULL;
+    return h;  // collisions only add candidates; distances decide
+  }
+  double cell_;
+  double origin_[3];
+  std::vector<double> pts_;
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells_;
+};
+
+std::string xyz(const double* p) {
+  std::ostringstream s;
+  s.precision(9);
+  s << "(" << p[0] << ", " << p[1] << ", " << p[2] << ")";
+  return s.str();
+}
+
+/// Node ids kept after dropping `drop`, compacted in order; Steiner points appended.
+NodeSet rebuild_nodes(const NodeSet& nodes, const std::vector<std::uint8_t>& drop,
+                      const NodeSet& steiner) {
+  NodeSet out;
+  for (std::size_t i = 0; i < nodes.size_count(); ++i)
+    if (!drop[i]) out.push_back(nodes.points.p(std::uint32_t(i)), nodes.kind[i], nodes.facet[i], nodes.size[i]);
+  for (std::size_t i = 0; i < steiner.size_count(); ++i)
+    out.push_back(steiner.points.p(std::uint32_t(i)), steiner.kind[i], steiner.facet[i], steiner.size[i]);
+  return out;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query,
+                       const SizingField& sizing, NodeSet nodes, const VolumeMeshOptions& options) {
+  const std::size_t n0 = nodes.points.size();
+  if (nodes.kind.size() != n0 || nodes.facet.size() != n0 || nodes.size.size() != n0)
+    throw UsageError("mesh_volume: the node set's kind/facet/size arrays (" +
+                     std::to_string(nodes.kind.size()) + "/" + std::to_string(nodes.facet.size()) +
+                     "/" + std::to_string(nodes.size.size()) + ") do not match its " +
+                     std::to_string(n0) + " points");
+  if (const std::size_t bad = first_non_finite(nodes.points); bad < n0)
+    throw GeometryError("mesh_volume: node " + std::to_string(bad) + " has a non-finite coordinate");
+  if (options.max_steiner_rounds < 0)
+    throw UsageError("mesh_volume: max_steiner_rounds must be >= 0");
+  if (!(options.hausdorff_tolerance > 0))
+    throw UsageError("mesh_volume: hausdorff_tolerance must be > 0");
+  for (std::size_t i = 0; i < n0; ++i)
+    if (nodes.facet[i] != kNoFacet && nodes.facet[i] >= surface.mesh.num_tris())
+      throw UsageError("mesh_volume: node " + std::to_string(i) + " names facet " +
+                       std::to_string(nodes.facet[i]) + ", but the surface has " +
+                       std::to_string(surface.mesh.num_tris()));
+
+  Stopwatch total;
+  VolumeMesh out;
+  VolumeMeshStats& st = out.stats;
+  st.input_nodes = n0;
+  const double* bmin = surface.bbox_min;
+  const double* bmax = surface.bbox_max;
+  double diag = 0;
+  for (int k = 0; k < 3; ++k) diag += (bmax[k] - bmin[k]) * (bmax[k] - bmin[k]);
+  diag = std::sqrt(diag);
+
+  DelaunayResult dr;
+  std::unique_ptr<CreaseFinder> creases;  // built on the first recovery round
+  bool rebuild = false;                    // nodes were dropped: triangulate from scratch
+  std::vector<std::uint32_t> pending_ids, pending_hints;  // Steiner points to insert, hints
+  std::vector<std::uint8_t> inside;
+  BoundaryFaces bf;
+  std::size_t folds_peeled = 0;  // all-surface tets taken out of the solid (peel_folds)
+  FaceVerdicts verdicts;         // boundary faces judged in earlier rounds (same node ids)
+  for (int round = 0;; ++round) {
+    if (round == 0 || rebuild) {
+      dr = triangulate(nodes, options, st);
+      if (round == 0) st.delaunay = dr.stats;
+    } else {
+      Stopwatch si;  // only Steiner points were added: insert them into the triangulation
+      DelaunayStats ds;
+      delaunay_insert(dr.tri, nodes.points, pending_ids, pending_hints, ds);
+      st.delaunay_seconds += si.seconds();
+      ++st.insert_rounds;
+    }
+    Stopwatch sw;
+    if (options.progress) options.progress("classify", 0);
+    inside = classify(dr.tri, nodes, query, kOnSurfaceDistance * diag, st);
+    st.classify_seconds += sw.seconds();
+    if (options.progress) options.progress("classify", 1);
+
+    sw.reset();
+    // 0.8 x the tolerance: the mesher samples each face at its centroid and edge midpoints,
+    // the independent check more densely, so the margin keeps its verdict the same.
+    const double tolerance = 0.8 * options.hausdorff_tolerance;
+    bf = boundary_faces(dr.tri, inside);
+    BoundaryJudgement judge = judge_boundary(bf, nodes, surface, query, sizing, tolerance, &verdicts);
+    if (!judge.bad_faces.empty() || !judge.bad_vertices.empty() || !judge.bad_edges.empty()) {
+      const std::size_t peeled = peel_folds(dr.tri, nodes, surface, query, sizing, tolerance, bf, judge, inside);
+      if (peeled > 0) {
+        folds_peeled += peeled;
+        bf = boundary_faces(dr.tri, inside);
+        judge = judge_boundary(bf, nodes, surface, query, sizing, tolerance, &verdicts);
+      }
+    }
+    // Kept tets that are flat at rounding level (4 nodes coplanar up to rounding, e.g. lattice
+    // nodes next to surface nodes; all-surface ones are already outside): their interior
+    // nodes are dropped, like interior nodes on boundary faces (measured: 1 such tet among
+    // 21M on the paper-size gear box).
+    std::vector<std::uint32_t> flat;
+    {
+      std::vector<std::vector<std::uint32_t>> part(64);
+      parallel_for(dr.tri.num_tets(), [&](std::size_t b, std::size_t e, unsigned w) {
+        for (std::size_t t = b; t < e; ++t)
+          if (inside[t] && flat_at_rounding(nodes.points, &dr.tri.data[8 * t]))
+            part[w].push_back(std::uint32_t(t));
+      }, 65536, 64);
+      for (auto& p : part) flat.insert(flat.end(), p.begin(), p.end());
+    }
+    const bool good = judge.bad_faces.empty() && judge.bad_edges.empty() &&
+                      judge.bad_vertices.empty() && flat.empty();
+    if (good) {
+      st.recover_seconds += sw.seconds();
+      break;
+    }
+
+    // Recovery: drop interior nodes on boundary faces; Steiner points on the surface near the
+    // other bad faces and around non-manifold edges and vertices.
+    std::vector<std::uint8_t> drop(nodes.size_count(), 0);
+    std::size_t dropped = 0;
+    std::vector<std::array<double, 3>> candidates;  // points whose closest surface point to add
+    std::vector<std::array<double, 3>> fallbacks;   // circumcentres, tried if the first is too close
+    std::vector<std::array<std::uint32_t, 3>> cand_facets;  // the face vertices' facets
+    std::vector<std::uint32_t> cand_hint;                    // a vertex of the face
+    auto face_pts = [&](std::uint32_t f, const double*& a, const double*& b, const double*& c) {
+      a = nodes.points.p(bf.verts[3 * std::size_t(f)]);
+      b = nodes.points.p(bf.verts[3 * std::size_t(f) + 1]);
+      c = nodes.points.p(bf.verts[3 * std::size_t(f) + 2]);
+    };
+    auto add_face_candidate = [&](std::uint32_t f) {
+      const double *a, *b, *c;
+      face_pts(f, a, b, c);
+      candidates.push_back({(a[0] + b[0] + c[0]) / 3, (a[1] + b[1] + c[1]) / 3, (a[2] + b[2] + c[2]) / 3});
+      double cc[3];
+      if (triangle_circumcentre(a, b, c, cc)) fallbacks.push_back({cc[0], cc[1], cc[2]});
+      else fallbacks.push_back(candidates.back());
+      const std::uint32_t* fv = &bf.verts[3 * std::size_t(f)];
+      cand_hint.push_back(fv[0]);
+      cand_facets.push_back({nodes.facet[fv[0]], nodes.facet[fv[1]], nodes.facet[fv[2]]});
+    };
+    for (std::size_t k = 0; k < judge.bad_faces.size(); ++k) {
+      const std::uint32_t f = judge.bad_faces[k];
+      bool had_interior = false;
+      for (int j = 0; j < 3; ++j) {
+        const std::uint32_t v = bf.verts[3 * std::size_t(f) + j];
+        if (nodes.kind[v] == NodeKind::interior) {
+          had_interior = true;
+          if (!drop[v]) drop[v] = 1, ++dropped;
+        }
+      }
+      if (!had_interior) add_face_candidate(f);
+    }
+    for (std::uint32_t t : flat)
+      for (int j = 0; j < 4; ++j) {
+        const std::uint32_t v = dr.tri.v(t, j);
+        if (nodes.kind[v] == NodeKind::interior && !drop[v]) drop[v] = 1, ++dropped;
+      }
+    for (std::uint32_t f : judge.faces_at_bad_edges) add_face_candidate(f);
+    for (std::uint32_t f : judge.faces_at_bad_vertices) add_face_candidate(f);
+
+    // Each candidate: the closest surface point to the face centroid; if that is within 0.2 h
+    // of a node, the closest point on a nearby crease (edge kind: faces that cut across a
+    // re-entrant edge are only recovered by points on it); then the closest surface point to
+    // the face's circumcentre.
+    NodeSet steiner;
+    std::vector<std::uint32_t> steiner_hint;
+    if (!candidates.empty()) {
+      if (!creases) creases = std::make_unique<CreaseFinder>(surface.mesh);
+      // Cells of 0.2 x the largest node size: the search radius 0.2 h is about one cell.
+      float hmax = 0;
+      for (float x : nodes.size) hmax = std::max(hmax, x);
+      const double cell = hmax > 0 ? 0.2 * double(hmax) : 0.2 * sizing.max_size();
+      PointGrid grid(cell > 0 ? cell : 1e-3 * diag, bmin);
+      for (std::size_t i = 0; i < nodes.size_count(); ++i)
+        if (!drop[i]) grid.add(nodes.points.p(std::uint32_t(i)));
+      // The admissible gap starts at 0.2 h and halves (down to 0.0125 h) while no candidate
+      // is admissible: parts thinner than h (real scans and CAD at a coarse size) need Steiner
+      // points closer than 0.2 h to the nodes already on the other side.
+      for (double gap = 0.2; steiner.size_count() == 0 && gap >= 0.0125; gap /= 2)
+      for (std::size_t k = 0; k < candidates.size(); ++k) {
+        for (int attempt = 0; attempt < 3; ++attempt) {
+          double p[3];
+          std::uint32_t facet = kNoFacet;
+          NodeKind kind = NodeKind::surface;
+          if (attempt == 1) {
+            if (!creases->closest_crease_point(candidates[k].data(), cand_facets[k].data(), 3, p, &facet))
+              continue;
+            kind = NodeKind::edge;
+          } else {
+            query.closest(attempt == 0 ? candidates[k].data() : fallbacks[k].data(), p, &facet);
+          }
+          const double h = sizing(p);
+          if (grid.any_within(p, gap * h)) continue;
+          grid.add(p);
+          steiner.push_back(p, kind, facet, float(h));
+          steiner_hint.push_back(cand_hint[k]);
+          break;
+        }
+      }
+    }
+    st.recover_seconds += sw.seconds();
+
+    const bool progress_made = dropped > 0 || steiner.size_count() > 0;
+    if (round >= options.max_steiner_rounds || !progress_made) {
+      std::ostringstream msg;
+      msg << "mesh_volume: the boundary could not be recovered after " << round
+          << " Steiner round(s)" << (progress_made ? "" : " (no admissible Steiner point left)")
+          << " and " << folds_peeled << " folded surface tet(s) taken out"
+          << ": " << judge.bad_faces.size() << " bad boundary face(s), " << judge.bad_edges.size() / 2
+          << " non-manifold edge(s), " << judge.bad_vertices.size() << " non-manifold vertex(es)";
+      std::size_t shown = 0;
+      for (std::size_t k = 0; k < judge.bad_faces.size() && shown < 5; ++k, ++shown) {
+        const double *a, *b, *c;
+        face_pts(judge.bad_faces[k], a, b, c);
+        const double m[3] = {(a[0] + b[0] + c[0]) / 3, (a[1] + b[1] + c[1]) / 3, (a[2] + b[2] + c[2]) / 3};
+        msg << (shown ? "; " : "; e.g. ") << "face at " << xyz(m) << " ("
+            << judge.reasons[k] << ")";
+      }
+      for (std::size_t k = 0; k + 1 < judge.bad_edges.size() && shown < 5; k += 2, ++shown)
+        msg << "; non-manifold edge " << xyz(nodes.points.p(judge.bad_edges[k])) << "-"
+            << xyz(nodes.points.p(judge.bad_edges[k + 1]));
+      for (std::size_t k = 0; k < judge.bad_vertices.size() && shown < 5; ++k, ++shown)
+        msg << "; non-manifold vertex " << xyz(nodes.points.p(judge.bad_vertices[k]));
+      std::vector<double> where;  // every bad place, for a caller that refines there
+      for (std::uint32_t f : judge.bad_faces) {
+        const double *a, *b, *c;
+        face_pts(f, a, b, c);
+        for (int k = 0; k < 3; ++k) where.push_back((a[k] + b[k] + c[k]) / 3);
+      }
+      for (std::size_t k = 0; k + 1 < judge.bad_edges.size(); k += 2)
+        for (int q = 0; q < 3; ++q)
+          where.push_back((nodes.points.p(judge.bad_edges[k])[q] + nodes.points.p(judge.bad_edges[k + 1])[q]) / 2);
+      for (std::uint32_t v : judge.bad_vertices) where.insert(where.end(), nodes.points.p(v), nodes.points.p(v) + 3);
+      throw BoundaryRecoveryError(msg.str(), std::move(where));
+    }
+    st.dropped_nodes += dropped;
+    st.steiner_points += steiner.size_count();
+    st.rounds = round + 1;
+    rebuild = dropped > 0;
+    pending_ids.clear();
+    pending_hints.clear();
+    if (!rebuild) {  // ids of the existing nodes are unchanged; the new ones follow
+      for (std::size_t k = 0; k < steiner.size_count(); ++k) {
+        pending_ids.push_back(std::uint32_t(nodes.size_count() + k));
+        pending_hints.push_back(steiner_hint[k]);
+      }
+    }
+    nodes = rebuild_nodes(nodes, drop, steiner);
+    if (rebuild) verdicts.clear();  // the ids changed
+  }
+
+  // ---- result: inside tets, boundary, regions; nodes no inside tet uses are removed ----
+  Stopwatch sw;
+  const Triangulation& tri = dr.tri;
+  const std::size_t nt = tri.num_tets();
+  std::vector<std::uint32_t> new_tet(nt, kNone);
+  std::uint32_t count = 0;
+  for (std::size_t t = 0; t < nt; ++t)
+    if (inside[t]) new_tet[t] = count++;
+  if (count == 0)
+    throw GeometryError("mesh_volume: no tetrahedron of the " + std::to_string(nodes.size_count()) +
+                        " nodes lies inside the solid");
+
+  // Regions: components of the inside tets through shared faces (union-find in one sequential
+  // pass); each takes the body of the shell of the facet closest to one of its boundary faces.
+  // With a single body every tet is in body 0 and the pass is skipped.
+  std::vector<std::uint32_t> region_of;  // per tet of tri: body id (empty = all 0)
+  if (surface.num_bodies > 1) {
+    std::vector<std::uint32_t> parent(nt);
+    std::iota(parent.begin(), parent.end(), 0u);
+    auto find = [&](std::uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    for (std::size_t t = 0; t < nt; ++t) {
+      if (!inside[t]) continue;
+      for (int i = 0; i < 4; ++i) {
+        const std::uint32_t u = tri.adj(t, i) >> 2;
+        if (u >= t || !inside[u]) continue;
+        const std::uint32_t a = find(std::uint32_t(t)), b = find(u);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);
+      }
+    }
+    std::vector<std::uint32_t> root_body(nt, kNone);
+    for (std::size_t f = 0; f < bf.size(); ++f) {
+      const std::uint32_t r = find(bf.tet[f]);
+      if (root_body[r] != kNone) continue;
+      const std::uint32_t* fv = &bf.verts[3 * f];
+      double m[3], p[3];
+      for (int k = 0; k < 3; ++k)
+        m[k] = (nodes.points.p(fv[0])[k] + nodes.points.p(fv[1])[k] + nodes.points.p(fv[2])[k]) / 3;
+      std::uint32_t facet = 0;
+      query.closest(m, p, &facet);
+      const std::uint32_t shell = facet < surface.tri_shell.size() ? surface.tri_shell[facet] : 0;
+      root_body[r] = shell < surface.shell_body.size() ? surface.shell_body[shell] : 0;
+    }
+    region_of.assign(nt, 0);
+    for (std::size_t t = 0; t < nt; ++t)
+      if (inside[t]) {
+        const std::uint32_t b = root_body[find(std::uint32_t(t))];
+        region_of[t] = b == kNone ? 0 : b;  // every finite component has a boundary face
+      }
+  }
+  std::vector<std::uint32_t> new_id(nodes.size_count(), kNone);
+  std::uint32_t nn = 0;
+  out.tets.reserve(4 * std::size_t(count));
+  out.tet_region.reserve(count);
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (!inside[t]) continue;
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t v = tri.v(t, i);
+      if (new_id[v] == kNone) new_id[v] = nn++;
+      out.tets.push_back(new_id[v]);
+    }
+    out.tet_region.push_back(region_of.empty() ? 0 : region_of[t]);
+  }
+  st.unused_nodes = nodes.size_count() - nn;
+  out.nodes.points.xyz.resize(3 * std::size_t(nn));
+  out.nodes.kind.resize(nn);
+  out.nodes.facet.resize(nn);
+  out.nodes.size.resize(nn);
+  for (std::size_t i = 0; i < nodes.size_count(); ++i) {
+    const std::uint32_t j = new_id[i];
+    if (j == kNone) continue;
+    std::copy_n(nodes.points.p(std::uint32_t(i)), 3, &out.nodes.points.xyz[3 * std::size_t(j)]);
+    out.nodes.kind[j] = nodes.kind[i];
+    out.nodes.facet[j] = nodes.facet[i];
+    out.nodes.size[j] = nodes.size[i];
+  }
+  out.boundary.resize(bf.verts.size());
+  for (std::size_t k = 0; k < bf.verts.size(); ++k) out.boundary[k] = new_id[bf.verts[k]];
+  {
+    std::vector<char> on_boundary(nn, 0);
+    for (std::uint32_t v : out.boundary) on_boundary[v] = 1;
+    for (std::uint32_t v = 0; v < nn; ++v)
+      if (!on_boundary[v] && out.nodes.kind[v] != NodeKind::interior) {
+        out.nodes.kind[v] = NodeKind::interior;
+        out.nodes.facet[v] = kNoFacet;
+        ++st.buried_nodes;
+      }
+  }
+  out.boundary_tet.resize(bf.tet.size());
+  for (std::size_t f = 0; f < bf.tet.size(); ++f) out.boundary_tet[f] = new_tet[bf.tet[f]];
+  st.region_seconds = sw.seconds();
+  st.total_seconds = total.seconds();
+  return out;
+}
+
+TetMesh to_tet_mesh(const VolumeMesh& mesh) {
+  TetMesh m;
+  m.points = mesh.nodes.points;
+  m.tets = mesh.tets;
+  const std::size_t n = mesh.nodes.size_count(), nt = mesh.num_tets();
+  DataArray kind{"node_kind", {}, {}}, size{"target_size", {}, {}};
+  kind.ints.resize(n);
+  size.reals.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    kind.ints[i] = std::int32_t(mesh.nodes.kind[i]);
+    size.reals[i] = double(mesh.nodes.size[i]);
+  }
+  m.point_data.push_back(std::move(kind));
+  m.point_data.push_back(std::move(size));
+  DataArray region{"region", {}, {}}, dih{"min_dihedral", {}, {}}, rr{"radius_ratio", {}, {}};
+  region.ints.resize(nt);
+  for (std::size_t t = 0; t < nt; ++t)
+    region.ints[t] = t < mesh.tet_region.size() ? std::int32_t(mesh.tet_region[t]) : 0;
+  dih.reals.resize(nt);
+  rr.reals.resize(nt);
+  parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t t = b; t < e; ++t) {
+      const std::uint32_t* v = &mesh.tets[4 * t];
+      const TetQuality q = tet_quality(m.points.p(v[0]), m.points.p(v[1]), m.points.p(v[2]),
+                                       m.points.p(v[3]));
+      dih.reals[t] = q.min_dihedral;
+      rr.reals[t] = q.radius_ratio;
+    }
+  });
+  m.cell_data.push_back(std::move(region));
+  m.cell_data.push_back(std::move(dih));
+  m.cell_data.push_back(std::move(rr));
+  return m;
+}
+
+}  // namespace kdmesh
