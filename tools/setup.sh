@@ -32,6 +32,7 @@ PACKAGES=(
   libclang-rt-14-dev
   libcli11-dev
   libeigen3-dev
+  libexodusii-dev
   libfmt-dev
   libgmp-dev
   libgtest-dev
@@ -45,9 +46,11 @@ PACKAGES=(
   python3-dev
   python3-dolfinx
   python3-meshio
+  python3-netcdf4
   python3-numpy
   python3-pytest
   python3-scipy
+  python3-vtk9
   tetgen
   time
   valgrind
