@@ -3,10 +3,11 @@
 //
 // References: "EXODUS II: A Finite Element Data Model" (Sandia SAND92-2137, Schoof and Yarberry),
 // the element types (TETRA4 / TETRA10 node order) and side set numbering of its section 3 and
-// appendix; the Exodus C API of libexodusii 6.02 (Debian's libexodusii-dev).
+// appendix; the Exodus C API (SEACAS exodus 8.11 as VTK 9.1 builds and ships it: the target
+// VTK::exodusII, header vtk_exodusII.h, symbols prefixed vtkexodusII_).
 #include "io/exodus_writer.h"
 
-#include <exodusII.h>
+#include <vtk_exodusII.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -167,7 +168,7 @@ void write_exodus(const FeMesh& mesh, const std::string& path) {
             "write the connectivity of element block " + std::to_string(block));
   }
   put_names(f, EX_ELEM_BLOCK, block_names, "element block");
-  if (!num_map.empty()) f.check(ex_put_elem_num_map(id, num_map.data()), "write the element number map");
+  if (!num_map.empty()) f.check(ex_put_id_map(id, EX_ELEM_MAP, num_map.data()), "write the element number map");
 
   std::vector<std::string> side_names, node_names;
   for (std::size_t g = 0; g < mesh.groups.size(); ++g) {

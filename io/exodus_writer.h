@@ -9,13 +9,13 @@
 namespace kdmesh {
 
 /// Writes `mesh` as an Exodus II file (netCDF classic 64-bit offset, 32-bit integers, double
-/// coordinates), through the Exodus C API (libexodusii 6.02), atomically (temporary file +
-/// rename; only a regular file is ever replaced). Contents:
+/// coordinates), through the Exodus C API (VTK's build of SEACAS exodus 8.11), atomically
+/// (temporary file + rename; only a regular file is ever replaced). Contents:
 ///  - title "kdmesh", 3 dimensions, coordinate names x y z; node n = point id + 1.
 ///  - One element block per region (distinct tet_entity value), in ascending region id:
 ///    block id = region id + 1, type TETRA4 (order 1) or TETRA10 (order 2). Elements are
 ///    numbered 1.. block after block, each block's tets in mesh order; the element number map
-///    (elem_num_map) gives each element's tet index + 1, i.e. kdmesh's own tet numbering.
+///    (the element id map, elem_num_map) gives each element's tet index + 1, i.e. kdmesh's own tet numbering.
 ///    Block name: the name of the first group of dim 3 whose entities are exactly that region,
 ///    else "region_<id>".
 ///  - One side set per group of dim 2: id = position in mesh.groups + 1 (the MSH physical tag),

@@ -1,7 +1,7 @@
 // kdmesh — Exodus II writer: read back through the Exodus C API (counts, nodes, blocks per
 // region, side sets with their side numbers, node sets, names), atomic replacement and errors.
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include <exodusII.h>
+#include <vtk_exodusII.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -120,7 +120,7 @@ ExoFile read_exodus(const std::string& path) {
     f.blocks[f.block_ids[i]] = b;
   }
   f.elem_num_map.resize(std::size_t(f.elements));
-  EXPECT_GE(ex_get_elem_num_map(exo, f.elem_num_map.data()), 0);
+  EXPECT_GE(ex_get_id_map(exo, EX_ELEM_MAP, f.elem_num_map.data()), 0);
   f.side_sets = read_sets(exo, EX_SIDE_SET, nss);
   f.node_sets = read_sets(exo, EX_NODE_SET, nns);
   ex_close(exo);

@@ -32,7 +32,6 @@ PACKAGES=(
   libclang-rt-14-dev
   libcli11-dev
   libeigen3-dev
-  libexodusii-dev
   libfmt-dev
   libgmp-dev
   libgtest-dev
