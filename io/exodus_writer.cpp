@@ -152,7 +152,8 @@ void write_exodus(const FeMesh& mesh, const std::string& path) {
   char* coord_ptrs[3] = {coord_names[0], coord_names[1], coord_names[2]};
   f.check(ex_put_coord_names(id, coord_ptrs), "write the coordinate names");
 
-  const char* type = mesh.order == 2 ? "TETRA10" : "TETRA4";
+  // "TETRA", not "TETRA4": meshio 5 maps TETRA4 to a cell type it does not know (KeyError)
+  const char* type = mesh.order == 2 ? "TETRA10" : "TETRA";
   for (std::size_t k = 0; k < regions.size(); ++k) {
     const ex_entity_id block = ex_entity_id(regions.ids[k]) + 1;
     f.check(ex_put_block(id, EX_ELEM_BLOCK, block, type, std::int64_t(regions.num_elements(k)),

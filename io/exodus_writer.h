@@ -13,7 +13,8 @@ namespace kdmesh {
 /// (temporary file + rename; only a regular file is ever replaced). Contents:
 ///  - title "kdmesh", 3 dimensions, coordinate names x y z; node n = point id + 1.
 ///  - One element block per region (distinct tet_entity value), in ascending region id:
-///    block id = region id + 1, type TETRA4 (order 1) or TETRA10 (order 2). Elements are
+///    block id = region id + 1, type TETRA (4 nodes; the manual's name, which every reader
+///    takes; meshio 5 rejects "TETRA4") or TETRA10 (order 2). Elements are
 ///    numbered 1.. block after block, each block's tets in mesh order; the element number map
 ///    (the element id map, elem_num_map) gives each element's tet index + 1, i.e. kdmesh's own tet numbering.
 ///    Block name: the name of the first group of dim 3 whose entities are exactly that region,

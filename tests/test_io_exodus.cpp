@@ -226,7 +226,7 @@ TEST(ExodusFormat, CubeReadsBackThroughTheExodusApi) {
     EXPECT_EQ(left.name, "region_0");
     EXPECT_EQ(right.name, "right_half");
     for (const ExoBlock* b : {&left, &right}) {
-      EXPECT_EQ(b->type, order == 2 ? "TETRA10" : "TETRA4");
+      EXPECT_EQ(b->type, order == 2 ? "TETRA10" : "TETRA");
       EXPECT_EQ(b->nodes_per_element, tn);
     }
     // the element number map gives kdmesh's tet; its nodes are FeMesh's in FeMesh's (= Exodus')
