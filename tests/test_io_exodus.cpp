@@ -154,14 +154,6 @@ std::size_t group_face_count(const FeMesh& m, const std::string& name) {
   return 0;
 }
 
-/// Temporary files (".tmp-") left in `dir`.
-int temporaries_in(const fs::path& dir) {
-  int n = 0;
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().filename().string().find(".tmp-") != std::string::npos) ++n;
-  return n;
-}
-
 TEST(ExodusFormat, SideNumbersOfTheUnitTetFollowTheManual) {
   // the unit tet (0,0,0) (1,0,0) (0,1,0) (0,0,1): side 1 is y = 0 (corners 1 2 4), side 2 the
   // slanted face (2 3 4), side 3 x = 0 (1 4 3), side 4 z = 0 (1 3 2)

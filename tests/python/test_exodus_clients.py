@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import kdmesh
+from boxes import two_boxes, volume
 
 
 def need(module, package):
@@ -18,19 +19,6 @@ def need(module, package):
         if os.environ.get("KDMESH_REQUIRE_CLIENTS") == "1":
             pytest.fail(f"{module} ({package}) is required but missing")
         pytest.skip(f"{module} ({package}) is not installed")
-
-
-def two_boxes():
-    """Two disjoint unit boxes (two regions), the second at x in [2, 3]."""
-    v = np.array([[(i & 1), (i >> 1 & 1), (i >> 2 & 1)] for i in range(8)], dtype=float)
-    f = np.array([0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
-                  2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5]).reshape(-1, 3)
-    return np.vstack([v, v + [2.0, 0.0, 0.0]]), np.vstack([f, f + 8])
-
-
-def volume(points, tets):
-    p = points[tets]
-    return np.einsum("ij,ij->i", p[:, 1] - p[:, 0], np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 0])).sum() / 6
 
 
 GROUPS = [{"name": "load", "point": [0.5, 0.5, 1.0]},          # the first box's top (dim 2)
