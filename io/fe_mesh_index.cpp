@@ -3,6 +3,7 @@
 #include "io/fe_mesh_index.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -59,6 +60,61 @@ void bucket_elements(const std::vector<std::uint32_t>& entities, EntityTable& t)
   t.element_of.resize(entities.size());
   std::vector<std::size_t> fill(t.start.begin(), t.start.end() - 1);
   for (std::size_t i = 0; i < entities.size(); ++i) t.element_of[fill[pos[i]]++] = std::uint32_t(i);
+}
+
+/// Open-addressing table from sorted corner triples to slots 0..n-1.
+class TriangleTable {
+ public:
+  explicit TriangleTable(std::size_t expected) {
+    std::size_t cap = 16;
+    while (cap < 2 * expected) cap *= 2;
+    keys_.assign(cap, Key{kEmpty, 0, 0});
+    vals_.assign(cap, 0);
+  }
+  /// The slot of {a, b, c} (sorted), inserting it as `next` if new; `inserted` tells which.
+  std::uint32_t insert(const std::array<std::uint32_t, 3>& k, std::uint32_t next, bool& inserted) {
+    std::size_t i = hash(k) & (keys_.size() - 1);
+    while (keys_[i].a != kEmpty) {
+      if (keys_[i].a == k[0] && keys_[i].b == k[1] && keys_[i].c == k[2]) {
+        inserted = false;
+        return vals_[i];
+      }
+      i = (i + 1) & (keys_.size() - 1);
+    }
+    keys_[i] = Key{k[0], k[1], k[2]};
+    vals_[i] = next;
+    inserted = true;
+    return next;
+  }
+  /// The slot of {a, b, c} (sorted), or kEmpty.
+  std::uint32_t find(const std::array<std::uint32_t, 3>& k) const {
+    std::size_t i = hash(k) & (keys_.size() - 1);
+    while (keys_[i].a != kEmpty) {
+      if (keys_[i].a == k[0] && keys_[i].b == k[1] && keys_[i].c == k[2]) return vals_[i];
+      i = (i + 1) & (keys_.size() - 1);
+    }
+    return kEmpty;
+  }
+  static constexpr std::uint32_t kEmpty = std::numeric_limits<std::uint32_t>::max();
+
+ private:
+  struct Key {
+    std::uint32_t a, b, c;
+  };
+  static std::size_t hash(const std::array<std::uint32_t, 3>& k) {
+    std::uint64_t h = std::uint64_t(k[0]) * 0x9E3779B97F4A7C15ull;
+    h ^= (h >> 29) ^ (std::uint64_t(k[1]) * 0xC2B2AE3D27D4EB4Full);
+    h ^= (h >> 31) ^ (std::uint64_t(k[2]) * 0x165667B19E3779F9ull);
+    return std::size_t(h ^ (h >> 33));
+  }
+  std::vector<Key> keys_;
+  std::vector<std::uint32_t> vals_;
+};
+
+/// True if (f0, f1, f2) is a cyclic rotation of (p, q, r).
+bool same_cycle(const std::uint32_t* f, std::uint32_t p, std::uint32_t q, std::uint32_t r) {
+  return (f[0] == p && f[1] == q && f[2] == r) || (f[0] == q && f[1] == r && f[2] == p) ||
+         (f[0] == r && f[1] == p && f[2] == q);
 }
 
 }  // namespace
@@ -183,6 +239,80 @@ std::vector<std::uint32_t> group_nodes(const FeMesh& mesh, const FeIndex& index,
       }
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
+  }
+  return out;
+}
+
+GroupFaceOwners match_group_faces(const FeMesh& mesh, const FeIndex& index, const int (&local_faces)[4][3],
+                                  const char* who, const char* purpose) {
+  constexpr std::uint32_t kNoSlot = GroupFaceOwners::kNoSlot;
+  GroupFaceOwners out;
+  const EntityTable& ft = index.dim[2];
+  const std::size_t nf = mesh.num_faces();
+  const std::size_t fn = std::size_t(mesh.face_nodes());
+  out.slot_of_face.assign(nf, kNoSlot);
+
+  std::size_t grouped = 0;
+  for (std::size_t k = 0; k < ft.size(); ++k)
+    if (ft.gstart[k + 1] > ft.gstart[k]) grouped += ft.num_elements(k);
+  if (grouped == 0) return out;
+  static_assert(kNoSlot == TriangleTable::kEmpty);
+
+  // Slots: one per distinct corner triple of a grouped face; rep = its first face.
+  TriangleTable table(grouped);
+  std::vector<std::uint32_t> rep;
+  std::vector<std::uint64_t> marked((mesh.points.size() + 63) / 64, 0);
+  for (std::size_t k = 0; k < ft.size(); ++k) {
+    if (ft.gstart[k + 1] == ft.gstart[k]) continue;
+    for (std::size_t j = ft.start[k]; j < ft.start[k + 1]; ++j) {
+      const std::uint32_t f = ft.element_of[j];
+      const std::uint32_t* c = mesh.faces.data() + std::size_t(f) * fn;
+      bool inserted;
+      const std::uint32_t s =
+          table.insert(sorted3(c[0], c[1], c[2]), std::uint32_t(rep.size()), inserted);
+      if (inserted) rep.push_back(f);
+      out.slot_of_face[f] = s;
+      for (int i = 0; i < 3; ++i) marked[c[i] >> 6] |= std::uint64_t(1) << (c[i] & 63);
+    }
+  }
+  out.tet.assign(rep.size(), kNoSlot);
+  out.face.assign(rep.size(), 0);
+  std::vector<std::uint8_t> outward(rep.size(), 0);
+
+  auto is_marked = [&](std::uint32_t v) { return (marked[v >> 6] >> (v & 63)) & 1; };
+  const std::size_t tn = std::size_t(mesh.tet_nodes());
+  const std::size_t nt = mesh.num_tets();
+  for (std::size_t t = 0; t < nt; ++t) {
+    const std::uint32_t* c = mesh.tets.data() + t * tn;
+    const bool m[4] = {bool(is_marked(c[0])), bool(is_marked(c[1])), bool(is_marked(c[2])),
+                       bool(is_marked(c[3]))};
+    if (int(m[0]) + int(m[1]) + int(m[2]) + int(m[3]) < 3) continue;
+    for (int l = 0; l < 4; ++l) {
+      const int* fc = local_faces[l];
+      if (!m[fc[0]] || !m[fc[1]] || !m[fc[2]]) continue;
+      const std::uint32_t s = table.find(sorted3(c[fc[0]], c[fc[1]], c[fc[2]]));
+      if (s == kNoSlot) continue;
+      // The listing turns inward, so the face is outward for this tet when its corners come
+      // in the reverse cyclic order.
+      const std::uint32_t* f = mesh.faces.data() + std::size_t(rep[s]) * fn;
+      const bool out_of_this = same_cycle(f, c[fc[0]], c[fc[2]], c[fc[1]]);
+      if (out.tet[s] == kNoSlot || (out_of_this && !outward[s])) {
+        out.tet[s] = std::uint32_t(t);
+        out.face[s] = std::uint8_t(l);
+        outward[s] = out_of_this;
+      }
+    }
+  }
+  for (std::size_t f = 0; f < nf; ++f) {
+    const std::uint32_t s = out.slot_of_face[f];
+    if (s == kNoSlot || out.tet[s] != kNoSlot) continue;
+    const std::uint32_t* c = mesh.faces.data() + f * fn;
+    const std::size_t k = ft.find(mesh.face_entity[f]);
+    throw UsageError(std::string(who) + ": face " + std::to_string(f) + " (points " + std::to_string(c[0]) +
+                     " " + std::to_string(c[1]) + " " + std::to_string(c[2]) + ", entity " +
+                     std::to_string(mesh.face_entity[f]) + ", group '" +
+                     mesh.groups[ft.group_of[ft.gstart[k]]].name + "') is not a face of any tet, so it cannot be part of " +
+                     purpose);
   }
   return out;
 }

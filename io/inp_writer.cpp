@@ -9,10 +9,8 @@
 #include "io/inp_writer.h"
 
 #include <algorithm>
-#include <array>
 #include <cctype>
 #include <cstdint>
-#include <limits>
 #include <string>
 #include <vector>
 
@@ -114,142 +112,10 @@ void check_names(const FeMesh& mesh, const InpOptions& options) {
   }
 }
 
-/// Open-addressing table from sorted corner triples to slots 0..n-1.
-class TriangleTable {
- public:
-  explicit TriangleTable(std::size_t expected) {
-    std::size_t cap = 16;
-    while (cap < 2 * expected) cap *= 2;
-    keys_.assign(cap, Key{kEmpty, 0, 0});
-    vals_.assign(cap, 0);
-  }
-  /// The slot of {a, b, c} (sorted), inserting it as `next` if new; `inserted` tells which.
-  std::uint32_t insert(const std::array<std::uint32_t, 3>& k, std::uint32_t next, bool& inserted) {
-    std::size_t i = hash(k) & (keys_.size() - 1);
-    while (keys_[i].a != kEmpty) {
-      if (keys_[i].a == k[0] && keys_[i].b == k[1] && keys_[i].c == k[2]) {
-        inserted = false;
-        return vals_[i];
-      }
-      i = (i + 1) & (keys_.size() - 1);
-    }
-    keys_[i] = Key{k[0], k[1], k[2]};
-    vals_[i] = next;
-    inserted = true;
-    return next;
-  }
-  /// The slot of {a, b, c} (sorted), or kEmpty.
-  std::uint32_t find(const std::array<std::uint32_t, 3>& k) const {
-    std::size_t i = hash(k) & (keys_.size() - 1);
-    while (keys_[i].a != kEmpty) {
-      if (keys_[i].a == k[0] && keys_[i].b == k[1] && keys_[i].c == k[2]) return vals_[i];
-      i = (i + 1) & (keys_.size() - 1);
-    }
-    return kEmpty;
-  }
-  static constexpr std::uint32_t kEmpty = std::numeric_limits<std::uint32_t>::max();
-
- private:
-  struct Key {
-    std::uint32_t a, b, c;
-  };
-  static std::size_t hash(const std::array<std::uint32_t, 3>& k) {
-    std::uint64_t h = std::uint64_t(k[0]) * 0x9E3779B97F4A7C15ull;
-    h ^= (h >> 29) ^ (std::uint64_t(k[1]) * 0xC2B2AE3D27D4EB4Full);
-    h ^= (h >> 31) ^ (std::uint64_t(k[2]) * 0x165667B19E3779F9ull);
-    return std::size_t(h ^ (h >> 33));
-  }
-  std::vector<Key> keys_;
-  std::vector<std::uint32_t> vals_;
-};
-
-std::array<std::uint32_t, 3> sorted3(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
-  std::array<std::uint32_t, 3> k = {a, b, c};
-  std::sort(k.begin(), k.end());
-  return k;
-}
-
-/// True if (f0, f1, f2) is a cyclic rotation of (p, q, r).
-bool same_cycle(const std::uint32_t* f, std::uint32_t p, std::uint32_t q, std::uint32_t r) {
-  return (f[0] == p && f[1] == q && f[2] == r) || (f[0] == q && f[1] == r && f[2] == p) ||
-         (f[0] == r && f[1] == p && f[2] == q);
-}
-
-/// The owning (tet, label) of every face of a dim-2 group; element = kEmpty where none.
-struct FaceOwners {
-  std::vector<std::uint32_t> slot_of_face;  ///< per face (kEmpty if not in a group)
-  std::vector<std::uint32_t> tet;           ///< per slot
-  std::vector<std::uint8_t> label;          ///< per slot, 1..4
-};
-
-FaceOwners match_faces(const FeMesh& mesh, const FeIndex& index) {
-  FaceOwners out;
-  const EntityTable& ft = index.dim[2];
-  const std::size_t nf = mesh.num_faces();
-  const std::size_t fn = std::size_t(mesh.face_nodes());
-  out.slot_of_face.assign(nf, TriangleTable::kEmpty);
-
-  std::size_t grouped = 0;
-  for (std::size_t k = 0; k < ft.size(); ++k)
-    if (ft.gstart[k + 1] > ft.gstart[k]) grouped += ft.num_elements(k);
-  if (grouped == 0) return out;
-
-  // Slots: one per distinct corner triple of a grouped face; rep = its first face.
-  TriangleTable table(grouped);
-  std::vector<std::uint32_t> rep;
-  std::vector<std::uint64_t> marked((mesh.points.size() + 63) / 64, 0);
-  for (std::size_t k = 0; k < ft.size(); ++k) {
-    if (ft.gstart[k + 1] == ft.gstart[k]) continue;
-    for (std::size_t j = ft.start[k]; j < ft.start[k + 1]; ++j) {
-      const std::uint32_t f = ft.element_of[j];
-      const std::uint32_t* c = mesh.faces.data() + std::size_t(f) * fn;
-      bool inserted;
-      const std::uint32_t s =
-          table.insert(sorted3(c[0], c[1], c[2]), std::uint32_t(rep.size()), inserted);
-      if (inserted) rep.push_back(f);
-      out.slot_of_face[f] = s;
-      for (int i = 0; i < 3; ++i) marked[c[i] >> 6] |= std::uint64_t(1) << (c[i] & 63);
-    }
-  }
-  out.tet.assign(rep.size(), TriangleTable::kEmpty);
-  out.label.assign(rep.size(), 0);
-  std::vector<std::uint8_t> outward(rep.size(), 0);
-
-  auto is_marked = [&](std::uint32_t v) { return (marked[v >> 6] >> (v & 63)) & 1; };
-  const std::size_t tn = std::size_t(mesh.tet_nodes());
-  const std::size_t nt = mesh.num_tets();
-  for (std::size_t t = 0; t < nt; ++t) {
-    const std::uint32_t* c = mesh.tets.data() + t * tn;
-    const bool m[4] = {bool(is_marked(c[0])), bool(is_marked(c[1])), bool(is_marked(c[2])),
-                       bool(is_marked(c[3]))};
-    if (int(m[0]) + int(m[1]) + int(m[2]) + int(m[3]) < 3) continue;
-    for (int l = 0; l < 4; ++l) {
-      const int* fc = kAbaqusFace[l];
-      if (!m[fc[0]] || !m[fc[1]] || !m[fc[2]]) continue;
-      const std::uint32_t s = table.find(sorted3(c[fc[0]], c[fc[1]], c[fc[2]]));
-      if (s == TriangleTable::kEmpty) continue;
-      // The listing turns inward, so the face is outward for this tet when its corners come
-      // in the reverse cyclic order.
-      const std::uint32_t* f = mesh.faces.data() + std::size_t(rep[s]) * fn;
-      const bool out_of_this = same_cycle(f, c[fc[0]], c[fc[2]], c[fc[1]]);
-      if (out.tet[s] == TriangleTable::kEmpty || (out_of_this && !outward[s])) {
-        out.tet[s] = std::uint32_t(t);
-        out.label[s] = std::uint8_t(l + 1);
-        outward[s] = out_of_this;
-      }
-    }
-  }
-  return out;
-}
-
 }  // namespace
 
 int abaqus_face_label(const std::uint32_t* tet, std::uint32_t a, std::uint32_t b, std::uint32_t c) {
-  const auto want = sorted3(a, b, c);
-  for (int l = 0; l < 4; ++l)
-    if (sorted3(tet[kAbaqusFace[l][0]], tet[kAbaqusFace[l][1]], tet[kAbaqusFace[l][2]]) == want)
-      return l + 1;
-  return 0;
+  return local_face_of(tet, kAbaqusFace, a, b, c) + 1;
 }
 
 void write_inp(const FeMesh& mesh, const std::string& path, const InpOptions& options) {
@@ -257,21 +123,7 @@ void write_inp(const FeMesh& mesh, const std::string& path, const InpOptions& op
   check_names(mesh, options);
 
   // Match every group face to its tet first: a failure must not leave a file behind.
-  const FaceOwners owners = match_faces(mesh, index);
-  const std::size_t fn = std::size_t(mesh.face_nodes());
-  for (std::size_t f = 0; f < owners.slot_of_face.size(); ++f) {
-    const std::uint32_t s = owners.slot_of_face[f];
-    if (s == TriangleTable::kEmpty || owners.tet[s] != TriangleTable::kEmpty) continue;
-    const std::uint32_t* c = mesh.faces.data() + f * fn;
-    const EntityTable& ft = index.dim[2];
-    const std::size_t k = ft.find(mesh.face_entity[f]);
-    throw UsageError("write_inp: face " + std::to_string(f) + " (points " + std::to_string(c[0]) +
-                     " " + std::to_string(c[1]) + " " + std::to_string(c[2]) + ", entity " +
-                     std::to_string(mesh.face_entity[f]) + ", group '" +
-                     mesh.groups[ft.group_of[ft.gstart[k]]].name +
-                     "') is not a face of any tet, so it cannot be part of a *SURFACE");
-  }
-
+  const GroupFaceOwners owners = match_group_faces(mesh, index, kAbaqusFace, "write_inp", "a *SURFACE");
   AtomicFile file(path);
   FileWriter writer(file.temp_path(), path);
   TextSink s(writer);
@@ -330,7 +182,7 @@ void write_inp(const FeMesh& mesh, const std::string& path, const InpOptions& op
         const std::size_t k = t.find(e);
         for (std::size_t j = t.start[k]; j < t.start[k + 1]; ++j) {
           const std::uint32_t slot = owners.slot_of_face[t.element_of[j]];
-          s.put_uint(std::uint64_t(owners.tet[slot]) + 1).put(", S").put_uint(owners.label[slot])
+          s.put_uint(std::uint64_t(owners.tet[slot]) + 1).put(", S").put_uint(owners.face[slot] + 1u)
               .put('\n');
         }
       }

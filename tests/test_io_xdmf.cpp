@@ -78,14 +78,6 @@ std::string dims_text(const std::vector<hsize_t>& dims) {
   return s;
 }
 
-/// Temporary files (".tmp-") left in `dir`.
-int temporaries_in(const fs::path& dir) {
-  int n = 0;
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().filename().string().find(".tmp-") != std::string::npos) ++n;
-  return n;
-}
-
 TEST(XdmfFormat, XmlIsWellFormedAndNamesTheDatasetsWithTheirShapes) {
   for (int order : {1, 2}) {
     const FeMesh mesh = cube_mesh(2, order);

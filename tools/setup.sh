@@ -45,9 +45,11 @@ PACKAGES=(
   python3-dev
   python3-dolfinx
   python3-meshio
+  python3-netcdf4
   python3-numpy
   python3-pytest
   python3-scipy
+  python3-vtk9
   tetgen
   time
   valgrind

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import kdmesh
+from boxes import two_boxes, volume
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SOURCE = os.environ.get("KDMESH_SOURCE_DIR", os.path.join(HERE, "..", ".."))
@@ -34,19 +35,6 @@ def read_with_dolfinx(path):
                          capture_output=True, text=True, env=env, timeout=600)
     assert run.returncode == 0, run.stderr
     return json.loads(run.stdout.strip().splitlines()[-1])
-
-
-def two_boxes():
-    """Two disjoint unit boxes (two regions), the second at x in [2, 3]."""
-    v = np.array([[(i & 1), (i >> 1 & 1), (i >> 2 & 1)] for i in range(8)], dtype=float)
-    f = np.array([0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
-                  2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5]).reshape(-1, 3)
-    return np.vstack([v, v + [2.0, 0.0, 0.0]]), np.vstack([f, f + 8])
-
-
-def volume(points, tets):
-    p = points[tets]
-    return np.einsum("ij,ij->i", p[:, 1] - p[:, 0], np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 0])).sum() / 6
 
 
 def group_tags(xdmf_text):

@@ -27,4 +27,12 @@ inline std::string scratch_path(const std::string& area, const std::string& ext)
   return p.string();
 }
 
+/// Temporary files (".tmp-", core/atomic_file.h) left in `dir`.
+inline int temporaries_in(const std::filesystem::path& dir) {
+  int n = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().filename().string().find(".tmp-") != std::string::npos) ++n;
+  return n;
+}
+
 }  // namespace kdmesh::test

@@ -74,6 +74,7 @@ MeshJob make_mesh_job(const MeshCliOptions& o) {
   job.medit = o.medit;
   job.boundary_vtu = o.boundary_vtu;
   job.xdmf = o.xdmf;
+  job.exodus = o.exodus;
   job.element_order = o.element_order;
   job.msh_version = o.msh_version == "2.2" ? 22 : 41;
   job.group_options.patch_groups = job.group_options.curve_groups = o.patch_groups;
@@ -169,6 +170,10 @@ void add_mesh_job_options(CLI::App* cmd, MeshCliOptions& o, const MeshCliSpec& s
     cmd->add_option("--xdmf", o.xdmf,
                     "Output XDMF (.xdmf, data in the .h5 beside it) for FEniCSx with cell_tags (regions) "
                     "and facet_tags (boundary groups)")
+        ->check(non_empty_path());
+    cmd->add_option("--exodus", o.exodus,
+                    "Output Exodus II (.exo) for MOOSE: an element block per region, a side set per "
+                    "surface group, a node set per group")
         ->check(non_empty_path());
     cmd->add_option("--element-order", o.element_order,
                     "1: linear tets; 2: quadratic (C3D10), mid-edge nodes on the surface")

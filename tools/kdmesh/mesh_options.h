@@ -29,7 +29,7 @@ struct MeshCliOptions {
   std::string max_memory;   ///< empty: the machine's memory
   std::string repair;       ///< comma-separated opt-in repairs
   std::string output, summary, nodes;
-  std::string msh, inp, medit, boundary_vtu, xdmf;
+  std::string msh, inp, medit, boundary_vtu, xdmf, exodus;
   int element_order = 1;
   std::string msh_version = "4.1";
   bool patch_groups = false;
@@ -48,7 +48,7 @@ struct MeshCliSpec {
   /// `input` and `--size` are required (kdmesh mesh). When false they are optional and the
   /// subcommand checks them itself (e.g. compare-tetgen, where --config replaces them).
   bool input_required = true;
-  /// The output options (-o, --summary, --nodes, --msh, --inp, --medit, --boundary-vtu, --xdmf,
+  /// The output options (-o, --summary, --nodes, --msh, --inp, --medit, --boundary-vtu, --xdmf, --exodus,
   /// --element-order, --msh-version, --patch-groups).
   bool outputs = true;
 };

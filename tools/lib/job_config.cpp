@@ -65,7 +65,7 @@ const std::vector<std::string> kJobKeys = {"name",        "input", "scale", "siz
                                            "tolerance", "max_refinements", "timeout"};
 const std::vector<std::string> kZoneTypes = {"sharp_edges", "polyline", "segment", "plane",
                                              "point",       "box",      "ball"};
-const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes", "msh", "inp", "mesh", "boundary_vtu", "xdmf"};
+const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes", "msh", "inp", "mesh", "boundary_vtu", "xdmf", "exodus"};
 const std::vector<std::string> kGroupKeys = {"name", "dim", "zone", "point", "box"};
 const std::vector<std::string> kChecks = {"tetgen", "delaunay"};
 
@@ -535,6 +535,7 @@ class Loader {
       if (o.count("boundary_vtu"))
         job.boundary_vtu = resolve_output(o.at("boundary_vtu").value, k + ": key 'boundary_vtu'");
       if (o.count("xdmf")) job.xdmf = resolve_output(o.at("xdmf").value, k + ": key 'xdmf'");
+      if (o.count("exodus")) job.exodus = resolve_output(o.at("exodus").value, k + ": key 'exodus'");
     }
     return job;
   }

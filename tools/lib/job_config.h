@@ -58,13 +58,16 @@ namespace kdmesh {
 ///     improve      optional bool: quality improvement after meshing (default true)
 ///     element_order optional 1 or 2 (C3D10 / tet10 with mid-edge nodes on the surface)
 ///     msh_version  optional 4.1 (default) or 2.2
-///     output       optional mapping {vtu, summary, nodes, msh, inp, mesh, boundary_vtu, xdmf}:
+///     output       optional mapping {vtu, summary, nodes, msh, inp, mesh, boundary_vtu, xdmf,
+///                  exodus}:
 ///                  paths relative to out_dir, inside it (BatchLoadOptions); no two outputs (of
 ///                  any jobs) may be one file, and no output may be any job's input. mesh is
 ///                  MEDIT; boundary_vtu the boundary faces and feature edges with their patch /
 ///                  curve ids and one 0/1 cell array per group (io/boundary_vtu_writer.h); xdmf
 ///                  XDMF for FEniCSx with cell and facet tags, its HDF5 data in the same path
-///                  with extension .h5 (io/xdmf_writer.h), which counts as an output too
+///                  with extension .h5 (io/xdmf_writer.h), which counts as an output too; exodus
+///                  Exodus II for MOOSE with element blocks, side sets and node sets
+///                  (io/exodus_writer.h)
 ///
 /// Every error is an InputError naming the file, the 1-based line and the key at fault:
 /// unknown keys (with the closest valid key), wrong types, missing required keys, bad values,

@@ -29,8 +29,9 @@ std::vector<JobOutput> job_outputs(const MeshJob& job) {
                              {"boundary_vtu", "boundary_vtu output", job.boundary_vtu},
                              {"xdmf", "xdmf output", job.xdmf}})
     if (!o.path.empty()) out.push_back(o);
-  if (!job.xdmf.empty())  // (last so far: right after the xdmf output)
+  if (!job.xdmf.empty())  // right after the xdmf output
     out.push_back({"xdmf_h5", "xdmf output's HDF5 file", xdmf_hdf5_path(job.xdmf)});
+  if (!job.exodus.empty()) out.push_back({"exodus", "exodus output", job.exodus});
   return out;
 }
 

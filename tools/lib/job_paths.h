@@ -11,7 +11,7 @@
 namespace kdmesh {
 
 /// One file a job writes: its batch-file output key ("vtu", "summary", "nodes", "msh", "inp",
-/// "mesh" (MEDIT), "boundary_vtu", "xdmf", and "xdmf_h5" for the XDMF file's HDF5 data), a
+/// "mesh" (MEDIT), "boundary_vtu", "xdmf", "xdmf_h5" for the XDMF file's HDF5 data, "exodus"), a
 /// label for messages ("vtu output", ...) and the path.
 struct JobOutput {
   const char* key;

@@ -21,6 +21,7 @@
 #include "io/inp_writer.h"
 #include "io/medit_writer.h"
 #include "io/msh_writer.h"
+#include "io/exodus_writer.h"
 #include "io/xdmf_writer.h"
 #include "io/points_io.h"
 #include "io/surface_io.h"
@@ -373,6 +374,7 @@ MeshResult run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann
     const std::string h5 = xdmf_hdf5_path(job.xdmf);
     write_xdmf_files(fe, t, add_file(h5, "xdmf_h5"), std::filesystem::path(h5).filename().string());
   });
+  output(job.exodus, "exodus", [&](const std::string& t) { write_exodus(fe, t); });
   if (!job.summary.empty()) outputs["summary"] = job.summary;
   j["outputs"] = outputs;
   j["status"] = "ok";
@@ -393,7 +395,7 @@ std::vector<std::string> output_paths(const MeshJob& job) {
 
 bool has_solver_outputs(const MeshJob& job) {
   return !job.msh.empty() || !job.inp.empty() || !job.medit.empty() || !job.boundary_vtu.empty() ||
-         !job.xdmf.empty();
+         !job.xdmf.empty() || !job.exodus.empty();
 }
 
 void add_report_json(const MeshReport& r, const FeMesh* fe, nlohmann::json& j) {

@@ -25,9 +25,10 @@ struct MeshJob : MeshParams {
   std::string vtu, summary, nodes;  ///< output paths (usable as is); empty = not written
   /// Solver formats (usable as is; empty = not written): Gmsh MSH, Abaqus/CalculiX INP, MEDIT,
   /// the boundary VTU (faces and feature edges with patch / curve ids and one 0/1 array per
-  /// boundary group, io/boundary_vtu_writer.h) and XDMF (with its HDF5 file beside it,
-  /// io/xdmf_writer.h). Any of them turns on the boundary groups stage (MeshParams::fe_groups).
-  std::string msh, inp, medit, boundary_vtu, xdmf;
+  /// boundary group, io/boundary_vtu_writer.h), XDMF (with its HDF5 file beside it,
+  /// io/xdmf_writer.h) and Exodus II (io/exodus_writer.h). Any of them turns on the boundary
+  /// groups stage (MeshParams::fe_groups).
+  std::string msh, inp, medit, boundary_vtu, xdmf, exodus;
   int msh_version = 41;        ///< 41 or 22
 };
 
@@ -35,7 +36,7 @@ struct MeshJob : MeshParams {
 /// to clean up after a crash.
 std::vector<std::string> output_paths(const MeshJob& job);
 
-/// Whether the job writes a solver format (msh, inp, medit, boundary_vtu, xdmf): those need
+/// Whether the job writes a solver format (msh, inp, medit, boundary_vtu, xdmf, exodus): those need
 /// the boundary groups stage.
 bool has_solver_outputs(const MeshJob& job);
 
@@ -62,7 +63,7 @@ struct MeshJobResult {
   ///            min_radius_ratio, max_radius_edge, min_dihedral_hist, radius_ratio_hist},
   ///   mesh_check {... every MeshCheck figure ..., pass, failures},
   ///   delaunay_check (when asked), notices [...], outputs {vtu, nodes, msh, inp, medit,
-  ///   boundary_vtu, xdmf, xdmf_h5, summary} (the files written, by kind),
+  ///   boundary_vtu, xdmf, xdmf_h5, exodus, summary} (the files written, by kind),
   ///   error {type, exit_code, message} (failed jobs only).
   /// Keys of stages a failed job never reached are absent.
   nlohmann::json summary;

@@ -20,6 +20,7 @@
 #include "io/boundary_vtu_writer.h"
 #include "io/inp_writer.h"
 #include "io/medit_writer.h"
+#include "io/exodus_writer.h"
 #include "io/xdmf_writer.h"
 #include "io/msh_writer.h"
 #include "io/points_io.h"
@@ -240,7 +241,8 @@ PYBIND11_MODULE(_kdmesh, m) {
       .def("write_inp", [](const PyMesh& p, const std::string& path) { write_inp(p.result.fe, path); })
       .def("write_medit", [](const PyMesh& p, const std::string& path) { write_medit(p.result.fe, path); })
       .def("write_boundary_vtu", [](const PyMesh& p, const std::string& path) { write_boundary_vtu(p.result.fe, path); })
-      .def("write_xdmf", [](const PyMesh& p, const std::string& path) { write_xdmf(p.result.fe, path); });
+      .def("write_xdmf", [](const PyMesh& p, const std::string& path) { write_xdmf(p.result.fe, path); })
+      .def("write_exodus", [](const PyMesh& p, const std::string& path) { write_exodus(p.result.fe, path); });
   m.def("run", &run, py::arg("surface"), py::arg("options_json"), py::arg("progress"), py::arg("cancel"));
   m.def("delaunay", &delaunay_tets, py::arg("points"), py::arg("order"), py::arg("threads"), py::arg("seed"));
   m.def("read_surface", [](const std::string& path) {

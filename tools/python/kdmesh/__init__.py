@@ -24,7 +24,7 @@ from . import _kdmesh
 __all__ = [
     "mesh", "delaunay", "read_surface", "write_surface", "Mesh", "Error", "InputError", "SurfaceError",
     "GeometryError", "CheckError", "OutputError", "ResourceError", "UsageError", "CancelledError",
-    "write_vtu", "write_msh", "write_inp", "write_medit", "write_boundary_vtu", "write_xdmf", "write_nodes",
+    "write_vtu", "write_msh", "write_inp", "write_medit", "write_boundary_vtu", "write_xdmf", "write_exodus", "write_nodes",
     "ORDERS",
 ]
 
@@ -295,3 +295,9 @@ def write_xdmf(m, path):
     """XDMF + HDF5 (the .h5 beside it) for dolfinx: grids "mesh", "cell_tags" (regions) and
     "facet_tags" (boundary faces, tagged by their first group's position + 1, else 0)."""
     _fe(m, "write_xdmf").write_xdmf(str(path))
+
+
+def write_exodus(m, path):
+    """Exodus II for MOOSE / ParaView: one element block per region, one side set per surface
+    group, one node set per group (io/exodus_writer.h)."""
+    _fe(m, "write_exodus").write_exodus(str(path))
