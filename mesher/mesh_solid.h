@@ -2,7 +2,7 @@
 //   surface -> prepared surface -> features -> sizing field -> nodes -> volume mesh ->
 //   quality improvement -> mesh check -> quality figures -> [boundary groups, quadratic nodes]
 // No files, no JSON, no exit codes: the CLI, the batch runner and the Python module are thin
-// layers over mesh_solid (tools/lib/mesh_job.h reads and writes the files around it).
+// layers over mesh_solid (tools/app/mesh_job.h reads and writes the files around it).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
 #include <array>
@@ -33,7 +33,7 @@
 namespace kdmesh {
 
 /// Everything the pipeline needs besides the surface (the `kdmesh mesh` options; one entry of
-/// a batch file; tools/lib/job_config.h has the YAML schema, key for key).
+/// a batch file; tools/app/job_config.h has the YAML schema, key for key).
 struct MeshParams {
   std::string name = "mesh";   ///< job name (messages)
   /// Where the surface came from (a file path when it was read from one): messages and

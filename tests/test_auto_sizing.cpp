@@ -24,7 +24,7 @@
 #include "sizing/features.h"
 #include "tests/support/icosphere.h"
 #include "tests/support/scratch.h"
-#include "tools/lib/mesh_job.h"
+#include "tools/app/mesh_job.h"
 
 namespace kdmesh {
 namespace {

@@ -1,5 +1,5 @@
 // kdmesh compare-tetgen end to end (both meshes, their measures, JSON, errors) and the pieces
-// of tools/lib/tetgen_compare.h it is made of (switches, background mesh).
+// of tools/compare/tetgen_compare.h it is made of (switches, background mesh).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <gtest/gtest.h>
 
@@ -16,7 +16,7 @@
 #include "mesher/quality/quality.h"
 #include "sizing/sizing_field.h"
 #include "tests/support/run_cli.h"
-#include "tools/lib/tetgen_compare.h"
+#include "tools/compare/tetgen_compare.h"
 #include "tests/support/tetgen.h"
 
 namespace {

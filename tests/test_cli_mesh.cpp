@@ -16,7 +16,7 @@
 #include "io/msh_reader.h"
 #include "io/surface_io.h"
 #include "tests/support/run_cli.h"
-#include "tools/lib/mesh_job.h"
+#include "tools/app/mesh_job.h"
 #include "tests/support/tetgen.h"
 
 namespace {
@@ -381,7 +381,7 @@ TEST(CliBatch, FailedJobIsIsolatedAndConcurrencyIsDeterministic) {
 }
 
 // A job whose process crashes (here a SIGSEGV injected through KDMESH_INJECT_CRASH, the
-// documented test hook of tools/lib/job_process.h) fails alone: the batch goes on, the other
+// documented test hook of tools/app/job_process.h) fails alone: the batch goes on, the other
 // jobs' outputs are written, and the crashed job leaves neither outputs nor temporaries, even
 // when it dies with one output already written to its temporary file.
 TEST(CliBatch, CrashedJobIsIsolatedAndLeavesNoTemporaries) {

@@ -15,7 +15,7 @@
 #include "mesher/reference/reference_delaunay.h"
 #include "mesher/reference/tet_compare.h"
 #include "tests/support/walk_histogram.h"
-#include "tools/lib/distributions.h"
+#include "tools/bench/lib/distributions.h"
 #include "tests/support/tetgen.h"
 
 namespace kdmesh {

@@ -12,7 +12,7 @@
 #include "mesher/order/order.h"
 #include "mesher/reference/tet_compare.h"
 #include "tests/support/walk_histogram.h"
-#include "tools/lib/distributions.h"
+#include "tools/bench/lib/distributions.h"
 
 namespace kdmesh {
 namespace {

@@ -19,7 +19,7 @@
 #include "core/surface_mesh.h"
 #include "io/surface_io.h"
 #include "tests/support/run_cli.h"
-#include "tools/lib/mesh_job.h"
+#include "tools/app/mesh_job.h"
 #include "mesher/numeric_ranges.h"
 #include "mesher/reference/reference_delaunay.h"
 
@@ -216,7 +216,7 @@ TEST(ExtremeNumbers, DelaunayCheckAtExtremeMagnitudes) {
   }
 }
 
-// Issue 19: the gradation was bounded at 2 by choice. The bound is now derived (tools/lib/
+// Issue 19: the gradation was bounded at 2 by choice. The bound is now derived (mesher/
 // numeric_ranges.h): an edge of length L leaving a zone of size s has the size s + g L / 2 at
 // its midpoint, which L reaches only when g < 2. So 2 is refused, naming the option and the
 // reason, and just below it the block refined along its edges meshes and passes its check.

@@ -1,4 +1,4 @@
-// kdmesh — batch files (tools/lib/job_config): schema -> MeshJob, and every config error naming
+// kdmesh — batch files (tools/app/job_config): schema -> MeshJob, and every config error naming
 // the file, the line and the key at fault.
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <gtest/gtest.h>
@@ -10,7 +10,7 @@
 
 #include "core/error.h"
 #include "tests/support/scratch.h"
-#include "tools/lib/job_config.h"
+#include "tools/app/job_config.h"
 #include "tests/support/tetgen.h"
 
 namespace {

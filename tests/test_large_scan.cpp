@@ -10,7 +10,7 @@
 #include "io/surface_io.h"
 #include "tests/support/scratch.h"
 #include "tests/support/torus.h"
-#include "tools/lib/mesh_job.h"
+#include "tools/app/mesh_job.h"
 
 namespace kdmesh {
 namespace {

@@ -15,7 +15,7 @@
 #include "io/vtu_writer.h"
 #include "mesher/mesh_solid.h"
 #include "mesher/surface/surface_prepare.h"
-#include "tools/lib/mesh_job.h"
+#include "tools/app/mesh_job.h"
 
 namespace kdmesh {
 namespace {

@@ -5,8 +5,8 @@
 
 #include <string>
 
-#include "tools/lib/job_config.h"
-#include "tools/lib/mesh_job.h"
+#include "tools/app/job_config.h"
+#include "tools/app/mesh_job.h"
 
 namespace kdmesh {
 namespace {

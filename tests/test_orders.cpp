@@ -20,7 +20,7 @@
 #include "core/rng.h"
 #include "mesher/order/hilbert.h"
 #include "mesher/order/order.h"
-#include "tools/lib/distributions.h"
+#include "tools/bench/lib/distributions.h"
 
 namespace kdmesh {
 namespace {

@@ -11,7 +11,7 @@
 #include "mesher/surface/surface_prepare.h"
 #include "mesher/surface/surface_repair.h"
 #include "tests/support/scratch.h"
-#include "tools/lib/mesh_job.h"
+#include "tools/app/mesh_job.h"
 
 namespace kdmesh {
 namespace {

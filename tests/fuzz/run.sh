@@ -16,10 +16,11 @@ mkdir -p "$OUT"
 CXX="${FUZZ_CXX:-clang++}"
 FLAGS=(-std=c++20 -O1 -g -fno-omit-frame-pointer -fsanitize=fuzzer,address,undefined
        -fno-sanitize-recover=undefined -I. -DKDMESH_FUZZ)
-# Sources by glob, so that a new file in core/ or io/ cannot break the link (io/vtu_writer.cpp
-# and io/xdmf_writer.cpp are left out: they need VTK and HDF5, which no reader uses).
+# Sources by glob, so that a new file in core/ or io/ cannot break the link (io/vtu_writer.cpp,
+# io/xdmf_writer.cpp and io/exodus_writer.cpp are left out: they need VTK and HDF5, which no
+# reader uses).
 CORE=(core/*.cpp)
-IO_READERS="$(ls io/*.cpp | grep -v 'vtu_writer\|xdmf_writer' | tr '\n' ' ')"
+IO_READERS="$(ls io/*.cpp | grep -v 'vtu_writer\|xdmf_writer\|exodus_writer' | tr '\n' ' ')"
 IO_POINTS="$IO_READERS"
 IO_SURFACE="$IO_READERS"
 ORDERS="$(ls mesher/order/order*.cpp | tr '\n' ' ')"
@@ -45,7 +46,7 @@ declare -A LIBS=(
 [ -f tests/fuzz/fuzz_medit.cpp ] && SOURCES[medit]="$IO_READERS" && LIBS[medit]=""
 # (mesher/reference/tetgen_delaunay.cpp without KDMESH_WITH_TETGEN is only tetgen_available() and its
 # message, which job_config asks for `check: [tetgen]`: no TetGen, no CGAL here.)
-[ -f tests/fuzz/fuzz_config.cpp ] && SOURCES[config]="tools/lib/job_config.cpp tools/lib/job_paths.cpp io/file_io.cpp $ORDERS mesher/reference/tetgen_delaunay.cpp" && LIBS[config]="-lyaml-cpp -lpthread"
+[ -f tests/fuzz/fuzz_config.cpp ] && SOURCES[config]="tools/app/job_config.cpp tools/app/job_paths.cpp io/file_io.cpp $ORDERS mesher/reference/tetgen_delaunay.cpp" && LIBS[config]="-lyaml-cpp -lpthread"
 
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=($(printf '%s\n' "${!SOURCES[@]}" | sort))

@@ -25,7 +25,7 @@
 #include "mesher/surface/surface_prepare.h"
 #include "mesher/volume/volume_mesh.h"
 #include "sizing/features.h"
-#include "tools/lib/job_config.h"
+#include "tools/app/job_config.h"
 
 namespace kdmesh {
 namespace {

@@ -10,7 +10,7 @@
 
 #include "core/point_set.h"
 #include "mesher/order/order.h"
-#include "tools/lib/distributions.h"
+#include "tools/bench/lib/distributions.h"
 
 namespace kdmesh {
 namespace {

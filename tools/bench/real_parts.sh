@@ -130,9 +130,9 @@ for t in $TOOLS; do VERSION[$t]="$(version "$t")"; done
 if [[ " $TOOLS " == *" kdmesh "* ]]; then
   # the last commit that changed the mesher's sources in the executable's own tree (when the
   # executable sits in BUILD_DIR/ of a git work tree), and whether they have uncommitted changes
-  kd_src="$(cd "$(dirname "$KDMESH")/.." && git log -1 --format=%h -- core io mesher sizing tools/kdmesh tools/lib 2>/dev/null || true)"
+  kd_src="$(cd "$(dirname "$KDMESH")/.." && git log -1 --format=%h -- core io mesher sizing tools/kdmesh tools/app 2>/dev/null || true)"
   if [ -n "$kd_src" ]; then
-    dirty="$(cd "$(dirname "$KDMESH")/.." && git status --porcelain -- core io mesher sizing tools/kdmesh tools/lib 2>/dev/null | head -1)"
+    dirty="$(cd "$(dirname "$KDMESH")/.." && git status --porcelain -- core io mesher sizing tools/kdmesh tools/app 2>/dev/null | head -1)"
     VERSION[kdmesh]="kdmesh sources at $kd_src${dirty:+ + uncommitted changes} ($KDMESH)"
   fi
   if [ -n "${KDMESH_VERSION:-}" ]; then VERSION[kdmesh]="$KDMESH_VERSION"; fi

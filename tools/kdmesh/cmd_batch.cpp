@@ -17,9 +17,9 @@
 #include "core/timer.h"
 #include "core/memory_amount.h"
 #include "tools/kdmesh/cli.h"
-#include "tools/lib/job_config.h"
-#include "tools/lib/job_process.h"
-#include "tools/lib/mesh_job.h"
+#include "tools/app/job_config.h"
+#include "tools/app/job_process.h"
+#include "tools/app/mesh_job.h"
 
 namespace kdmesh::cli {
 
@@ -202,7 +202,7 @@ void add_batch_command(CLI::App& app, Runner& run) {
       "runs. Each job runs in its own process: a job that fails, or crashes, is reported and\n"
       "the others continue. Exit code: 0 if every job\n"
       "succeeded; otherwise the failed jobs' code when they all share one, else 1.\n"
-      "Schema: tools/lib/job_config.h.");
+      "Schema: tools/app/job_config.h.");
   cmd->callback([o, &run] { run = [o] { return run_batch(*o); }; });
 }
 

@@ -11,7 +11,7 @@
 
 #include "core/error.h"
 #include "tools/kdmesh/cli.h"
-#include "tools/lib/bench.h"
+#include "tools/bench/lib/bench.h"
 
 namespace kdmesh::cli {
 

@@ -11,9 +11,9 @@
 #include "mesher/reference/reference_delaunay.h"
 #include "tools/kdmesh/cli.h"
 #include "tools/kdmesh/mesh_options.h"
-#include "tools/lib/job_config.h"
-#include "tools/lib/mesh_job.h"
-#include "tools/lib/tetgen_compare.h"
+#include "tools/app/job_config.h"
+#include "tools/app/mesh_job.h"
+#include "tools/compare/tetgen_compare.h"
 
 namespace kdmesh::cli {
 

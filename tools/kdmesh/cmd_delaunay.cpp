@@ -17,8 +17,8 @@
 #include "mesher/reference/tet_adjacency.h"
 #include "mesher/reference/tet_compare.h"
 #include "tools/kdmesh/cli.h"
-#include "tools/lib/delaunay_verify.h"
-#include "tools/lib/job_paths.h"
+#include "tools/app/delaunay_verify.h"
+#include "tools/app/job_paths.h"
 
 namespace kdmesh::cli {
 

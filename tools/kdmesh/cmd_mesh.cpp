@@ -7,7 +7,7 @@
 #include "core/error.h"
 #include "tools/kdmesh/cli.h"
 #include "tools/kdmesh/mesh_options.h"
-#include "tools/lib/mesh_job.h"
+#include "tools/app/mesh_job.h"
 
 namespace kdmesh::cli {
 

@@ -5,7 +5,7 @@
 #include "core/timer.h"
 #include "io/points_io.h"
 #include "tools/kdmesh/cli.h"
-#include "tools/lib/distributions.h"
+#include "tools/bench/lib/distributions.h"
 
 namespace kdmesh::cli {
 

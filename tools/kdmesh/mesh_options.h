@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "tools/kdmesh/cli.h"
-#include "tools/lib/mesh_job.h"
+#include "tools/app/mesh_job.h"
 
 namespace kdmesh::cli {
 

@@ -1,5 +1,5 @@
 // kdmesh — the Python module's native part (_kdmesh): a thin layer over the job runner
-// (tools/lib/mesh_job.h, itself over mesher/mesh_solid.h) and the Delaunay kernel. The
+// (tools/app/mesh_job.h, itself over mesher/mesh_solid.h) and the Delaunay kernel. The
 // options are the batch file's job keys, parsed by the same code (parse_job); errors come back
 // as data and tools/python/kdmesh/__init__.py raises the Python exception classes from them.
 // SPDX-License-Identifier: AGPL-3.0-or-later
@@ -29,8 +29,8 @@
 #include "mesher/delaunay/delaunay.h"
 #include "mesher/order/order.h"
 #include "mesher/surface/surface_prepare.h"
-#include "tools/lib/job_config.h"
-#include "tools/lib/mesh_job.h"
+#include "tools/app/job_config.h"
+#include "tools/app/mesh_job.h"
 
 namespace py = pybind11;
 using namespace kdmesh;

@@ -94,7 +94,7 @@
 
 #include "core/error.h"
 #include "core/rng.h"
-#include "tools/lib/distributions.h"
+#include "tools/bench/lib/distributions.h"
 
 namespace kdmesh {
 

@@ -17,10 +17,10 @@ namespace kdmesh {
 /// One meshing job: the pipeline's parameters (mesher/mesh_solid.h; name and input, the
 /// surface file's path usable as is, are among them) plus where it was defined, its batch time
 /// limit and its output files (what `kdmesh mesh` options and one entry of a batch file map
-/// to; see tools/lib/job_config.h for the YAML schema).
+/// to; see tools/app/job_config.h for the YAML schema).
 struct MeshJob : MeshParams {
   std::string origin;          ///< where it was defined, e.g. "jobs.yaml:12" (may be empty)
-  /// Wall-clock limit in seconds when run in a batch (tools/lib/job_process.h); 0 = none.
+  /// Wall-clock limit in seconds when run in a batch (tools/app/job_process.h); 0 = none.
   double timeout = 0;
   std::string vtu, summary, nodes;  ///< output paths (usable as is); empty = not written
   /// Solver formats (usable as is; empty = not written): Gmsh MSH, Abaqus/CalculiX INP, MEDIT,

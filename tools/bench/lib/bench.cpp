@@ -24,8 +24,8 @@
 #include "mesher/delaunay/delaunay.h"
 #include "mesher/order/order.h"
 #include "mesher/reference/reference_delaunay.h"
-#include "tools/lib/bench.h"
-#include "tools/lib/distributions.h"
+#include "tools/bench/lib/bench.h"
+#include "tools/bench/lib/distributions.h"
 
 namespace kdmesh {
 

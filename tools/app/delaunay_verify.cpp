@@ -1,6 +1,6 @@
 // kdmesh — verify a Delaunay tetrahedralization: exact validity, TetGen 1.5, CGAL 5.5.
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "tools/lib/delaunay_verify.h"
+#include "tools/app/delaunay_verify.h"
 
 #include <algorithm>
 #include <cmath>

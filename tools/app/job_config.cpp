@@ -1,7 +1,7 @@
 // kdmesh — batch files: YAML -> MeshJob list, every error naming file:line and key.
 // yaml-cpp stays in this file.
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "tools/lib/job_config.h"
+#include "tools/app/job_config.h"
 
 #include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
@@ -21,7 +21,7 @@
 #include "io/surface_io.h"
 #include "mesher/reference/reference_delaunay.h"
 #include "mesher/surface/surface_repair.h"
-#include "tools/lib/job_paths.h"
+#include "tools/app/job_paths.h"
 
 namespace kdmesh {
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "tools/lib/job_paths.h"
+#include "tools/app/job_paths.h"
 
 #include "core/atomic_file.h"
 #include "core/error.h"

@@ -1,6 +1,6 @@
 // kdmesh — one meshing job: the whole pipeline, its summary, and all-or-nothing outputs.
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "tools/lib/mesh_job.h"
+#include "tools/app/mesh_job.h"
 
 #include <algorithm>
 #include <array>
@@ -33,8 +33,8 @@
 #include "mesher/quality/quality.h"
 #include "mesher/reference/reference_delaunay.h"
 #include "mesher/reference/tet_compare.h"
-#include "tools/lib/delaunay_verify.h"
-#include "tools/lib/job_paths.h"
+#include "tools/app/delaunay_verify.h"
+#include "tools/app/job_paths.h"
 
 namespace kdmesh {
 

@@ -17,7 +17,7 @@
 
 #include "core/error.h"
 #include "core/timer.h"
-#include "tools/lib/bench.h"
+#include "tools/bench/lib/bench.h"
 
 namespace kdmesh {
 

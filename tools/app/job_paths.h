@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "core/path_clash.h"
-#include "tools/lib/mesh_job.h"
+#include "tools/app/mesh_job.h"
 
 namespace kdmesh {
 

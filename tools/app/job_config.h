@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "tools/lib/mesh_job.h"
+#include "tools/app/mesh_job.h"
 
 namespace kdmesh {
 

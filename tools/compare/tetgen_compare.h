@@ -14,7 +14,7 @@
 #include "core/tet_mesh.h"
 #include "mesher/surface/surface_prepare.h"
 #include "sizing/sizing_field.h"
-#include "tools/lib/mesh_job.h"
+#include "tools/app/mesh_job.h"
 
 namespace kdmesh {
 

@@ -11,7 +11,7 @@
 // sends its mesh back through a pipe; its stdout and stderr (TetGen's log, and glibc's
 // message if it crashes) go through a second pipe, from which TetGen's own stage times are
 // read.
-#include "tools/lib/tetgen_compare.h"
+#include "tools/compare/tetgen_compare.h"
 
 #include <malloc.h>
 #include <poll.h>

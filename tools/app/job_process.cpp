@@ -1,6 +1,6 @@
 // kdmesh — running meshing jobs in child processes.
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "tools/lib/job_process.h"
+#include "tools/app/job_process.h"
 
 #include <poll.h>
 #include <sys/prctl.h>

@@ -5,7 +5,7 @@
 #include <functional>
 #include <vector>
 
-#include "tools/lib/mesh_job.h"
+#include "tools/app/mesh_job.h"
 
 namespace kdmesh {
 

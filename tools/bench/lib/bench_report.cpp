@@ -17,9 +17,9 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "tools/lib/bench.h"
-#include "tools/lib/bench_paper.h"
-#include "tools/lib/distributions.h"
+#include "tools/bench/lib/bench.h"
+#include "tools/bench/lib/bench_paper.h"
+#include "tools/bench/lib/distributions.h"
 
 namespace kdmesh {
 
