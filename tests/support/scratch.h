@@ -3,7 +3,10 @@
 #pragma once
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <filesystem>
+#include <functional>
 #include <string>
 
 namespace kdmesh::test {
@@ -33,6 +36,29 @@ inline int temporaries_in(const std::filesystem::path& dir) {
   for (const auto& e : std::filesystem::directory_iterator(dir))
     if (e.path().filename().string().find(".tmp-") != std::string::npos) ++n;
   return n;
+}
+
+/// A writer refuses paths it cannot write: `write(path)` throws E naming the path when its
+/// directory is missing, and (unless root, who ignores permissions) throws E into a read-only
+/// directory leaving no temporary behind. `dir` must exist; `name` is the file name to try.
+template <class E>
+void expect_unwritable_refused(const std::filesystem::path& dir, const std::string& name,
+                               const std::function<void(const std::string&)>& write) {
+  const std::string missing = (dir / "no" / "such" / name).string();
+  try {
+    write(missing);
+    ADD_FAILURE() << "no error for " << missing;
+  } catch (const E& e) {
+    EXPECT_EQ(e.file(), missing);
+  }
+  if (::geteuid() != 0) {
+    const std::filesystem::path ro = dir / "ro";
+    std::filesystem::create_directories(ro);
+    std::filesystem::permissions(ro, std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
+    EXPECT_THROW(write((ro / name).string()), E);
+    EXPECT_EQ(temporaries_in(ro), 0);
+    std::filesystem::permissions(ro, std::filesystem::perms::owner_all);
+  }
 }
 
 }  // namespace kdmesh::test
