@@ -148,6 +148,19 @@ nlohmann::json quality_json(const QualitySummary& q) {
           {"radius_ratio_hist", histogram_json(q.radius_ratio_hist)}};
 }
 
+nlohmann::json size_fidelity_json(const SizeFidelity& f) {
+  return {{"edges", f.edges},
+          {"mean_ratio", f.mean_ratio},
+          {"fraction_in_range", f.in_range},
+          {"range", {0.7, 1.4}},
+          {"short_fraction", f.short_fraction},
+          {"long_fraction", f.long_fraction},
+          {"min_ratio", f.min_ratio},
+          {"max_ratio", f.max_ratio},
+          {"away_edges", f.away_edges},
+          {"away_mean_ratio", f.away_mean_ratio}};
+}
+
 namespace {
 
 nlohmann::json mesh_check_json(const MeshCheck& c) {
@@ -168,18 +181,6 @@ nlohmann::json mesh_check_json(const MeshCheck& c) {
           {"failures", c.failures}};
 }
 
-nlohmann::json size_fidelity_json(const SizeFidelity& f) {
-  return {{"edges", f.edges},
-          {"mean_ratio", f.mean_ratio},
-          {"fraction_in_range", f.in_range},
-          {"range", {0.7, 1.4}},
-          {"short_fraction", f.short_fraction},
-          {"long_fraction", f.long_fraction},
-          {"min_ratio", f.min_ratio},
-          {"max_ratio", f.max_ratio},
-          {"away_edges", f.away_edges},
-          {"away_mean_ratio", f.away_mean_ratio}};
-}
 
 /// The summary's groups: name, dim, how many entities each lists and how many elements of its
 /// dimension (tets, boundary faces, feature-edge segments) those entities have.

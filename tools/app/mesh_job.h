@@ -100,6 +100,10 @@ void add_report_json(const MeshReport& report, const FeMesh* fe, nlohmann::json&
 /// radius-edge, mean/min volume-length, and the two histograms {lo, hi, counts}.
 nlohmann::json quality_json(const QualitySummary& q);
 
+/// The summary's "size_fidelity" block: edges, mean_ratio, fraction_in_range, range,
+/// short/long_fraction, min/max_ratio, away_edges, away_mean_ratio.
+nlohmann::json size_fidelity_json(const SizeFidelity& f);
+
 /// A short human-readable table of a job summary (counts, quality, size fidelity, check,
 /// times, outputs or the error), one item per line, each line ending in '\n'.
 std::string format_job_report(const nlohmann::json& summary);

@@ -613,15 +613,7 @@ nlohmann::json measure_mesh(const TetMesh& mesh, const SizingField& sizing, doub
            {{"mesh", volume},
             {"solid", solid_volume},
             {"relative_error", solid_volume != 0 ? std::fabs(volume - solid_volume) / std::fabs(solid_volume) : 0.0}}},
-          {"size_fidelity",
-           {{"edges", f.edges},
-            {"mean_ratio", f.mean_ratio},
-            {"fraction_in_range", f.in_range},
-            {"range", {0.7, 1.4}},
-            {"short_fraction", f.short_fraction},
-            {"long_fraction", f.long_fraction},
-            {"min_ratio", f.min_ratio},
-            {"max_ratio", f.max_ratio}}}};
+          {"size_fidelity", size_fidelity_json(f)}};
 }
 
 // ---- the comparison ------------------------------------------------------------------------
