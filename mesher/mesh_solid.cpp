@@ -87,7 +87,7 @@ void check_memory_estimate(const Job& job, const PreparedSurface& surface, const
   const double limit = effective_memory_limit(params.max_memory);
   // Beyond twice the limit the exact excess does not matter: stop integrating there.
   const double cap = limit > 0 ? std::max(1e6, 2 * limit / kBytesPerNode) : 2e9;
-  const ResourceEstimate e = estimate_resources(surface, query, sizing, cap);
+  const ResourceEstimate e = estimate_resources({surface, query, sizing}, cap);
   job.report.seconds["estimate"] = clock.seconds();  // the last attempt's
   char count[32];  // whole numbers while exact; beyond 2^53 (or non-finite) in scientific form
   if (e.nodes < 9e15) std::snprintf(count, sizeof count, "%.0f", e.nodes);
@@ -225,7 +225,7 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
     PlacementOptions po;
     po.seed = params.seed;
     po.progress = job.progress();
-    NodeSet nodes = place_nodes(surface, query, features, m.sizing, po);
+    NodeSet nodes = place_nodes({surface, query, m.sizing}, features, po);
     job.add_seconds("place", clock.seconds());
     report.counts.placed_nodes = nodes.points.size();
 
@@ -238,7 +238,7 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
     vo.progress = job.progress();
     vo.hausdorff_tolerance = params.check.hausdorff_tolerance;
     try {
-      m.mesh = mesh_volume(surface, query, m.sizing, std::move(nodes), vo);
+      m.mesh = mesh_volume({surface, query, m.sizing}, std::move(nodes), vo);
     } catch (const BoundaryRecoveryError& e) {
       job.add_seconds("mesh", clock.seconds());
       const std::size_t added = attempt < params.max_refinements ? refine_at(e.where(), m.sizing, options) : 0;
@@ -276,14 +276,14 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
       io.progress = job.progress();
       io.hausdorff_tolerance = params.check.hausdorff_tolerance;
       io.feature_angle = options.feature_angle_deg;
-      report.improve = improve_mesh(m.mesh, surface, query, m.sizing, io);
+      report.improve = improve_mesh(m.mesh, {surface, query, m.sizing}, io);
       job.add_seconds("improve", clock.seconds());
       count_mesh(m.mesh, counts);
     }
 
     clock.reset();
     job.log("checking the mesh");
-    m.check = check_volume_mesh(m.mesh, surface, query, m.sizing, params.check);
+    m.check = check_volume_mesh(m.mesh, {surface, query, m.sizing}, params.check);
     job.add_seconds("mesh_check", clock.seconds());
     if (m.check.ok() || !m.check.only_sizing_failures()) return m;
     const std::size_t added = attempt < params.max_refinements ? refine_at(m.check.refine_at, m.sizing, options) : 0;

@@ -22,7 +22,7 @@
 #include "mesher/quality/mesh_check.h"
 #include "mesher/improve/mesh_improve.h"
 #include "mesher/order/order.h"
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 #include "mesher/resource_estimate.h"
 #include "mesher/quality/size_fidelity.h"
 #include "mesher/surface/surface_repair.h"

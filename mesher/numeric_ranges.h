@@ -4,7 +4,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
 #include "core/surface_mesh.h"
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 #include "mesher/mesh_solid.h"
 
 namespace kdmesh {
@@ -41,7 +41,7 @@ static_assert(kMaxLength < 0x1p128 && kMinLength >= 0x1p-126, "sizes are stored 
 /// each rounds every coordinate to ulp(M)/2 <= 2^-53 M, so a node exactly on the facet in
 /// real numbers measures up to 2 ulp(M) = 2^-51 M off it. The check (and the classification
 /// of flat surface tets) calls a point on the surface within kOnSurfaceDistance x D
-/// (mesher/quality/quality.h), so 2^-51 M <= 1e-9 D: M / D <= 1e-9 x 2^51 = 2.25e6; the power of two
+/// (mesher/tet_quality.h), so 2^-51 M <= 1e-9 D: M / D <= 1e-9 x 2^51 = 2.25e6; the power of two
 /// below is 2^21 = 2.10e6. (The block, D = 173, moved by 1e8 meshes; moved by 1e9,
 /// M / D = 5.8e6, its check found nodes 2 ulp = 2.4e-7 > 1.7e-7 off the surface.)
 constexpr double kMaxMagnitudePerExtent = 0x1p21;

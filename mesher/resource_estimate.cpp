@@ -180,8 +180,10 @@ void integrate_volume(const PreparedSurface& s, const SurfaceQuery& q, const Siz
 
 }  // namespace
 
-ResourceEstimate estimate_resources(const PreparedSurface& surface, const SurfaceQuery& query,
-                                    const SizingField& sizing, double node_cap) {
+ResourceEstimate estimate_resources(const Domain& domain, double node_cap) {
+  const PreparedSurface& surface = domain.surface;
+  const SurfaceQuery& query = domain.query;
+  const SizingField& sizing = domain.sizing;
   ResourceEstimate e;
   integrate_surface(surface.mesh, sizing, e, node_cap);
   if (!e.capped) integrate_volume(surface, query, sizing, e, node_cap - e.surface_nodes);

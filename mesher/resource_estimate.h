@@ -6,9 +6,7 @@
 #include <string>
 
 #include "core/memory_amount.h"
-#include "mesher/surface/surface_prepare.h"
-#include "mesher/surface/surface_query.h"
-#include "sizing/sizing_field.h"
+#include "mesher/domain.h"
 
 namespace kdmesh {
 
@@ -41,7 +39,6 @@ inline constexpr double kBaseBytes = 16e6;
 /// wholly inside (by the surface distance) where h varies little across it (by the field's
 /// gradation bound). Deterministic. Costs O(estimated nodes / 100) queries; stops early, with
 /// `capped` set, once the node estimate passes `node_cap` (so absurd sizes are refused fast).
-ResourceEstimate estimate_resources(const PreparedSurface& surface, const SurfaceQuery& query,
-                                    const SizingField& sizing, double node_cap = 2e9);
+ResourceEstimate estimate_resources(const Domain& domain, double node_cap = 2e9);
 
 }  // namespace kdmesh

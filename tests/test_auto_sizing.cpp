@@ -16,7 +16,7 @@
 #include "mesher/quality/mesh_check.h"
 #include "mesher/improve/mesh_improve.h"
 #include "mesher/placement/node_placement.h"
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 #include "mesher/volume/volume_mesh.h"
 #include "mesher/surface/surface_prepare.h"
 #include "mesher/surface/surface_query.h"
@@ -222,15 +222,15 @@ struct SphereMesh {
     so.feature_angle_deg = 14.25;
     h = build_sizing_field(s.mesh, so);
     const FeatureEdges features = detect_sharp_edges(s.mesh, 14.25);
-    delaunay = mesh_volume(s, *q, h, place_nodes(s, *q, features, h));
+    delaunay = mesh_volume({s, *q, h}, place_nodes({s, *q, h}, features));
   }
   /// The improved mesh, checked by the mesh check.
   VolumeMesh improved(const ImproveOptions& base, ImproveStats& st, QualitySummary& qs) const {
     VolumeMesh m = delaunay;
     ImproveOptions o = base;
     o.feature_angle = 14.25;
-    st = improve_mesh(m, s, *q, h, o);
-    const MeshCheck c = check_volume_mesh(m, s, *q, h);
+    st = improve_mesh(m, {s, *q, h}, o);
+    const MeshCheck c = check_volume_mesh(m, {s, *q, h});
     EXPECT_TRUE(c.ok()) << (c.failures.empty() ? "" : c.failures[0]);
     qs = summarize_quality(to_tet_mesh(m));
     return m;

@@ -96,8 +96,8 @@ struct Meshed {
     so.max_size = h;
     so.zones = std::move(zones);
     sizing = build_sizing_field(surface.mesh, so);
-    mesh = mesh_volume(surface, *query, sizing, place_nodes(surface, *query, features, sizing));
-    const MeshCheck c = check_volume_mesh(mesh, surface, *query, sizing);
+    mesh = mesh_volume({surface, *query, sizing}, place_nodes({surface, *query, sizing}, features));
+    const MeshCheck c = check_volume_mesh(mesh, {surface, *query, sizing});
     std::string f;
     for (const auto& x : c.failures) f += x + "\n";
     EXPECT_TRUE(c.ok()) << f;

@@ -13,7 +13,7 @@
 
 #include "core/surface_mesh.h"
 #include "io/surface_io.h"
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 #include "sizing/sizing_field.h"
 #include "tests/support/run_cli.h"
 #include "tools/compare/tetgen_compare.h"

@@ -24,7 +24,7 @@
 #include "mesher/improve/mesh_improve.h"
 #include "mesher/placement/node_placement.h"
 #include "mesher/delaunay/predicates.h"
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 #include "mesher/surface/surface_prepare.h"
 #include "mesher/volume/volume_mesh.h"
 #include "sizing/features.h"
@@ -716,8 +716,8 @@ Piped pipeline(const std::vector<std::array<double, 6>>& bs, double h, double gr
     so.zones.push_back(z);
   }
   p.sizing = build_sizing_field(p.surface.mesh, so);
-  const NodeSet nodes = place_nodes(p.surface, *p.query, detect_sharp_edges(p.surface.mesh, 30), p.sizing);
-  p.mesh = mesh_volume(p.surface, *p.query, p.sizing, nodes);
+  const NodeSet nodes = place_nodes({p.surface, *p.query, p.sizing}, detect_sharp_edges(p.surface.mesh, 30));
+  p.mesh = mesh_volume({p.surface, *p.query, p.sizing}, nodes);
   return p;
 }
 
@@ -787,7 +787,7 @@ TEST(ImproveInsert, SliverAndItsNeighboursBecomeAFanAroundANewNode) {
   EXPECT_EQ(boundary_set(vm), bset);
   EXPECT_EQ(vm.nodes.size_count(), nodes_before + inserted);
   EXPECT_NEAR(total_volume(vm), volume_before, 1e-12);
-  const MeshCheck c = check_volume_mesh(vm, p.surface, *p.query, p.sizing);
+  const MeshCheck c = check_volume_mesh(vm, {p.surface, *p.query, p.sizing});
   EXPECT_TRUE(c.ok()) << failures(c);
 }
 
@@ -863,12 +863,12 @@ TEST(MeshImprove, GradedCubeKeepsEveryInvariantAndRaisesTheWorstAngle) {
     EXPECT_EQ(stage, "improve");
     fractions.push_back(f);
   };
-  const ImproveStats st = improve_mesh(p.mesh, p.surface, *p.query, p.sizing, o);
+  const ImproveStats st = improve_mesh(p.mesh, {p.surface, *p.query, p.sizing}, o);
   ASSERT_FALSE(fractions.empty());
   EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
   EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
   const VolumeMesh& vm = p.mesh;
-  const MeshCheck c = check_volume_mesh(vm, p.surface, *p.query, p.sizing);
+  const MeshCheck c = check_volume_mesh(vm, {p.surface, *p.query, p.sizing});
   EXPECT_TRUE(c.ok()) << failures(c);
   ASSERT_EQ(vm.tet_region.size(), vm.num_tets());
   ASSERT_EQ(vm.boundary_tet.size(), vm.boundary.size() / 3);
@@ -934,7 +934,7 @@ TEST(MeshImprove, GradedCubeKeepsEveryInvariantAndRaisesTheWorstAngle) {
     ImproveOptions ot = o;
     ot.progress = nullptr;
     ot.threads = threads;
-    improve_mesh(again, p.surface, *p.query, p.sizing, ot);
+    improve_mesh(again, {p.surface, *p.query, p.sizing}, ot);
     EXPECT_EQ(again.tets, vm.tets) << threads << " threads";
     EXPECT_EQ(again.nodes.points.xyz, vm.nodes.points.xyz) << threads << " threads";
     EXPECT_EQ(again.tet_region, vm.tet_region);
@@ -966,17 +966,17 @@ TEST(MeshImprove, RegressionHandleRoundsGoOnWhileTetsBelowTheTargetGetFewer) {
   o.max_rounds = 1;
   o.target_angle = kTarget;
   VolumeMesh one = p.mesh;
-  const ImproveStats s1 = improve_mesh(one, p.surface, *p.query, p.sizing, o);
+  const ImproveStats s1 = improve_mesh(one, {p.surface, *p.query, p.sizing}, o);
   EXPECT_EQ(s1.rounds, 1);
   const std::size_t after_one = below_target(one);
   ASSERT_GT(after_one, 0u);  // what further rounds are for
   o.max_rounds = 40;
   VolumeMesh more = p.mesh;
-  const ImproveStats s2 = improve_mesh(more, p.surface, *p.query, p.sizing, o);
+  const ImproveStats s2 = improve_mesh(more, {p.surface, *p.query, p.sizing}, o);
   EXPECT_GT(s2.rounds, 1);
   EXPECT_LT(s2.rounds, 40);
   EXPECT_LT(below_target(more), after_one);
-  const MeshCheck c = check_volume_mesh(more, p.surface, *p.query, p.sizing);
+  const MeshCheck c = check_volume_mesh(more, {p.surface, *p.query, p.sizing});
   EXPECT_TRUE(c.ok()) << failures(c);
   // The extra rounds, splits and insertions make no thread-dependent choice (split_angle 30:
   // on this cube nothing is below 12 deg when the split pass runs).
@@ -984,12 +984,12 @@ TEST(MeshImprove, RegressionHandleRoundsGoOnWhileTetsBelowTheTargetGetFewer) {
   od.split_angle = 30;
   VolumeMesh first = p.mesh;
   od.threads = 1;
-  const ImproveStats sf = improve_mesh(first, p.surface, *p.query, p.sizing, od);
+  const ImproveStats sf = improve_mesh(first, {p.surface, *p.query, p.sizing}, od);
   EXPECT_GT(sf.splits + sf.boundary_splits + sf.insertions, 0u);
   for (unsigned threads : {2u, 0u}) {
     VolumeMesh again = p.mesh;
     od.threads = threads;
-    const ImproveStats sa = improve_mesh(again, p.surface, *p.query, p.sizing, od);
+    const ImproveStats sa = improve_mesh(again, {p.surface, *p.query, p.sizing}, od);
     EXPECT_EQ(sa.rounds, sf.rounds) << threads << " threads";
     EXPECT_EQ(sa.insertions, sf.insertions) << threads << " threads";
     EXPECT_EQ(again.tets, first.tets) << threads << " threads";
@@ -997,7 +997,7 @@ TEST(MeshImprove, RegressionHandleRoundsGoOnWhileTetsBelowTheTargetGetFewer) {
   }
   o.rounds = 0;  // no rounds at all: the mesh is left as it is, whatever max_rounds says
   VolumeMesh none = p.mesh;
-  EXPECT_EQ(improve_mesh(none, p.surface, *p.query, p.sizing, o).rounds, 0);
+  EXPECT_EQ(improve_mesh(none, {p.surface, *p.query, p.sizing}, o).rounds, 0);
   EXPECT_EQ(tet_sets(none.tets), tet_sets(p.mesh.tets));
 }
 
@@ -1009,9 +1009,9 @@ TEST(MeshImprove, TwoBodiesKeepTheirRegions) {
   const auto bset = boundary_set(p.mesh);
   ImproveOptions o;
   o.flip_boundary = false;  // the boundary face set stays as it is
-  improve_mesh(p.mesh, p.surface, *p.query, p.sizing, o);
+  improve_mesh(p.mesh, {p.surface, *p.query, p.sizing}, o);
   const VolumeMesh& vm = p.mesh;
-  const MeshCheck c = check_volume_mesh(vm, p.surface, *p.query, p.sizing);
+  const MeshCheck c = check_volume_mesh(vm, {p.surface, *p.query, p.sizing});
   EXPECT_TRUE(c.ok()) << failures(c);
   EXPECT_EQ(boundary_set(vm), bset);
   double vol[2] = {0, 0};
@@ -1031,10 +1031,10 @@ TEST(MeshImprove, BadOptionsThrow) {
   Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.5);
   ImproveOptions o;
   o.work_angle = 0;
-  EXPECT_THROW(improve_mesh(p.mesh, p.surface, *p.query, p.sizing, o), UsageError);
+  EXPECT_THROW(improve_mesh(p.mesh, {p.surface, *p.query, p.sizing}, o), UsageError);
   o = {};
   o.max_ring = 2;
-  EXPECT_THROW(improve_mesh(p.mesh, p.surface, *p.query, p.sizing, o), UsageError);
+  EXPECT_THROW(improve_mesh(p.mesh, {p.surface, *p.query, p.sizing}, o), UsageError);
 }
 
 }  // namespace

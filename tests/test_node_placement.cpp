@@ -181,14 +181,14 @@ void expect_surface_nodes_on_facets(const Model& m, const NodeSet& ns, double ex
 TEST(NodePlacement, BoxSurfaceNodesLieOnTheirFacet) {
   const Model m = box(1, 1.3, 0.7);
   const SurfaceQuery q(m.surface.mesh);
-  const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, 0.1));
+  const NodeSet ns = place_nodes({m.surface, q, uniform(m, 0.1)}, m.features);
   expect_surface_nodes_on_facets(m, ns, 1.3);
 }
 
 TEST(NodePlacement, CylinderSurfaceNodesLieOnTheirFacet) {
   const Model m = cylinder(0.5, 1, 48);
   const SurfaceQuery q(m.surface.mesh);
-  const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, 0.08));
+  const NodeSet ns = place_nodes({m.surface, q, uniform(m, 0.08)}, m.features);
   expect_surface_nodes_on_facets(m, ns, 1);
   // The rims are feature loops: edge nodes exist and lie on z = 0 or z = 1 at radius <= r.
   std::size_t rim = 0;
@@ -224,7 +224,7 @@ TEST(NodePlacement, BoxInteriorNodesInsideAndClear) {
   const Model m = box(1, 1.3, 0.7);
   const SurfaceQuery q(m.surface.mesh);
   const SizingField h = uniform(m, 0.1);
-  const NodeSet ns = place_nodes(m.surface, q, m.features, h);
+  const NodeSet ns = place_nodes({m.surface, q, h}, m.features);
   expect_interior_clear(m, ns, h, PlacementOptions{}.interior_clearance);
 }
 
@@ -234,7 +234,7 @@ TEST(NodePlacement, CylinderInteriorNodesInsideAndClearWithOtherClearance) {
   const SizingField h = uniform(m, 0.08);
   PlacementOptions o;
   o.interior_clearance = 1.3;
-  const NodeSet ns = place_nodes(m.surface, q, m.features, h, o);
+  const NodeSet ns = place_nodes({m.surface, q, h}, m.features, o);
   expect_interior_clear(m, ns, h, 1.3);
 }
 
@@ -321,7 +321,7 @@ TEST(InteriorFill, LatticeIsTurnedOffTheAxesAndExact) {
 TEST(NodePlacement, BoxCornersArePresentAsCornerNodes) {
   const Model m = box(1, 1.3, 0.7);
   const SurfaceQuery q(m.surface.mesh);
-  const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, 0.1));
+  const NodeSet ns = place_nodes({m.surface, q, uniform(m, 0.1)}, m.features);
   ASSERT_EQ(count(ns, NodeKind::corner), 8u);
   std::set<std::vector<double>> corners, expected;
   for (std::uint32_t i = 0; i < ns.size_count(); ++i)
@@ -340,7 +340,7 @@ TEST(NodePlacement, UniformEdgeSpacingIsLengthOverRoundedCount) {
   // 0.11818...; z edges 0.7/0.12 = 5.83 -> 6 of 0.11666...
   const Model m = box(1, 1.3, 0.7);
   const SurfaceQuery q(m.surface.mesh);
-  const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, 0.12));
+  const NodeSet ns = place_nodes({m.surface, q, uniform(m, 0.12)}, m.features);
   const double L[3] = {1, 1.3, 0.7};
   const int pieces[3] = {8, 11, 6};
   EXPECT_EQ(count(ns, NodeKind::edge), std::size_t(4 * (7 + 10 + 5)));
@@ -504,7 +504,7 @@ TEST(NodePlacement, NoTwoNodesCloserThanTheGuaranteedBound) {
     const Model m = cyl ? cylinder(0.5, 1, 48) : box(1, 1.3, 0.7);
     const double h = cyl ? 0.09 : 0.12;
     const SurfaceQuery q(m.surface.mesh);
-    const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, h));
+    const NodeSet ns = place_nodes({m.surface, q, uniform(m, h)}, m.features);
     EXPECT_GE(closest_pair(ns), 0.7 * h * (1 - 1e-12)) << (cyl ? "cylinder" : "box");
   }
 }
@@ -525,7 +525,7 @@ TEST(NodePlacement, NodeCountsFollowVolumeAndAreaOverCellSize) {
   const double L[3] = {1, 1.3, 0.7}, h = 0.05, c = 0.8, a = 1.083 * h;
   const Model m = box(L[0], L[1], L[2]);
   const SurfaceQuery q(m.surface.mesh);
-  const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, h));
+  const NodeSet ns = place_nodes({m.surface, q, uniform(m, h)}, m.features);
   double lo = 2, hi = 2;
   for (const double l : L) {
     lo *= (l - 2 * c * h - 2 * a) / a;
@@ -560,11 +560,11 @@ TEST(NodePlacement, DeterministicForASeedAndDifferentAcrossSeeds) {
   const SizingField h = uniform(m, 0.08);
   PlacementOptions o;
   o.seed = 7;
-  const NodeSet a = place_nodes(m.surface, q, m.features, h, o);
-  const NodeSet b = place_nodes(m.surface, q, m.features, h, o);
+  const NodeSet a = place_nodes({m.surface, q, h}, m.features, o);
+  const NodeSet b = place_nodes({m.surface, q, h}, m.features, o);
   EXPECT_TRUE(same(a, b));
   o.seed = 8;
-  const NodeSet c = place_nodes(m.surface, q, m.features, h, o);
+  const NodeSet c = place_nodes({m.surface, q, h}, m.features, o);
   EXPECT_FALSE(same(a, c));
 }
 
@@ -575,7 +575,7 @@ TEST(NodePlacement, PlateThinnerThanTheClearanceHasSurfaceNodesOnly) {
   // c h = 0.16, so no interior node may exist.
   const Model m = box(1, 1, 0.1);
   const SurfaceQuery q(m.surface.mesh);
-  const NodeSet ns = place_nodes(m.surface, q, m.features, uniform(m, 0.2));
+  const NodeSet ns = place_nodes({m.surface, q, uniform(m, 0.2)}, m.features);
   EXPECT_EQ(count(ns, NodeKind::interior), 0u);
   EXPECT_EQ(count(ns, NodeKind::corner), 8u);
   EXPECT_GT(count(ns, NodeKind::surface), 0u);
@@ -588,9 +588,9 @@ TEST(NodePlacement, BadClearanceIsAUsageError) {
   const SurfaceQuery q(m.surface.mesh);
   PlacementOptions o;
   o.interior_clearance = -1;
-  EXPECT_THROW(place_nodes(m.surface, q, m.features, uniform(m, 0.2), o), UsageError);
+  EXPECT_THROW(place_nodes({m.surface, q, uniform(m, 0.2)}, m.features, o), UsageError);
   o.interior_clearance = NAN;
-  EXPECT_THROW(place_nodes(m.surface, q, m.features, uniform(m, 0.2), o), UsageError);
+  EXPECT_THROW(place_nodes({m.surface, q, uniform(m, 0.2)}, m.features, o), UsageError);
 }
 
 TEST(NodePlacement, ProgressReportsEveryStageUpToOne) {
@@ -605,7 +605,7 @@ TEST(NodePlacement, ProgressReportsEveryStageUpToOne) {
     EXPECT_LE(f, 1.0);
     last = f;
   };
-  place_nodes(m.surface, q, m.features, uniform(m, 0.2), o);
+  place_nodes({m.surface, q, uniform(m, 0.2)}, m.features, o);
   EXPECT_EQ(stages, (std::vector<std::string>{"edges", "surface", "interior"}));
   EXPECT_EQ(last, 1.0);
 }
@@ -646,7 +646,7 @@ TEST(NodePlacement, GradedFieldDensityFollowsTheField) {
   const Model m = box(2, 2, 2);
   const SizingField h = point_zone_field(m.surface.mesh, 0.1, 0.01, {1, 1, 1});
   const SurfaceQuery q(m.surface.mesh);
-  const NodeSet ns = place_nodes(m.surface, q, m.features, h);
+  const NodeSet ns = place_nodes({m.surface, q, h}, m.features);
   const double c = PlacementOptions{}.interior_clearance;
   const double n0[3] = {0.8, 0.8, 0.8}, n1[3] = {1.2, 1.2, 1.2};
   const double f0[3] = {1.4, 1.4, 1.4}, f1[3] = {1.7, 1.7, 1.7};

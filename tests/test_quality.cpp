@@ -1,11 +1,11 @@
-// kdmesh — tests of the tetrahedron shape measures (mesher/quality/quality.h).
+// kdmesh — tests of the tetrahedron shape measures (mesher/tet_quality.h).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <gtest/gtest.h>
 
 #include <array>
 #include <cmath>
 
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 
 namespace kdmesh {
 namespace {

@@ -31,7 +31,7 @@ TEST(ResourceEstimate, UniformSizeMatchesTheClosedForms) {
   const PreparedSurface s = box(10, 20, 30);
   const SurfaceQuery q(s.mesh);
   const double h = 0.7;
-  const ResourceEstimate e = estimate_resources(s, q, uniform(s, h));
+  const ResourceEstimate e = estimate_resources({s, q, uniform(s, h)});
   // A constant density integrates exactly however the facets are split.
   const double area = 2 * (10 * 20 + 20 * 30 + 10 * 30);
   EXPECT_NEAR(e.surface_nodes, area / (kSurfaceDensity * h * h), 1e-6 * e.surface_nodes);
@@ -58,7 +58,7 @@ TEST(ResourceEstimate, GradedSizeMatchesABruteForceIntegral) {
   z.coords = {5, 5, 20, 35, 30, 20};  // inside the box
   o.zones.push_back(z);
   const SizingField h = build_sizing_field(s.mesh, o);
-  const ResourceEstimate e = estimate_resources(s, q, h);
+  const ResourceEstimate e = estimate_resources({s, q, h});
   // Midpoint rule on a uniform 200^3 grid (cell 0.2, below the smallest size 0.3).
   const int n = 200;
   const double d = 40.0 / n;
@@ -77,7 +77,7 @@ TEST(ResourceEstimate, GradedSizeMatchesABruteForceIntegral) {
 TEST(ResourceEstimate, AbsurdSizeStopsAtTheCapQuickly) {
   const PreparedSurface s = box(100, 100, 100);
   const SurfaceQuery q(s.mesh);
-  const ResourceEstimate e = estimate_resources(s, q, uniform(s, 1e-3), 1e7);  // ~1.6e15 nodes
+  const ResourceEstimate e = estimate_resources({s, q, uniform(s, 1e-3)}, 1e7);  // ~1.6e15 nodes
   EXPECT_TRUE(e.capped);
   EXPECT_GT(e.nodes, 1e7);
   EXPECT_LT(e.samples, 2000000u);  // stopped once past the cap, not after 1e15 / 100 queries

@@ -32,15 +32,15 @@ void mesh_and_check(const SurfaceMesh& raw, double h, const std::string& name) {
   SizingOptions so;
   so.max_size = h;
   const SizingField sizing = build_sizing_field(s.mesh, so);
-  const NodeSet nodes = place_nodes(s, q, detect_sharp_edges(s.mesh, 60), sizing);
+  const NodeSet nodes = place_nodes({s, q, sizing}, detect_sharp_edges(s.mesh, 60));
   VolumeMesh vm;
   try {
-    vm = mesh_volume(s, q, sizing, nodes);
+    vm = mesh_volume({s, q, sizing}, nodes);
   } catch (const GeometryError& e) {
     FAIL() << name << ": " << e.what();
   }
   // The independent check, as strict as for any job.
-  const MeshCheck c = check_volume_mesh(vm, s, q, sizing);
+  const MeshCheck c = check_volume_mesh(vm, {s, q, sizing});
   std::string failures;
   for (const std::string& f : c.failures) failures += f + "\n";
   EXPECT_TRUE(c.ok()) << name << ":\n" << failures;
@@ -105,13 +105,13 @@ TEST(TorusRecovery, JudgeFaceSeesFoldsAndDistance) {
   const double top[4][3] = {{0.2, 0.2, 1}, {0.8, 0.2, 1}, {0.5, 0.8, 1}, {0.5, 0.5, 1.5}};
   for (auto& p : top) n.push_back(p, NodeKind::surface, kNoFacet, 1);
   const std::uint32_t out[3] = {0, 1, 2}, in[3] = {0, 2, 1}, lifted[3] = {0, 1, 3};
-  EXPECT_EQ(judge_face(out, n, s, q, sizing, 0.08), 0);
-  EXPECT_EQ(judge_face(in, n, s, q, sizing, 0.08), kFaceAgainst);
+  EXPECT_EQ(judge_face(out, n, {s, q, sizing}, 0.08), 0);
+  EXPECT_EQ(judge_face(in, n, {s, q, sizing}, 0.08), kFaceAgainst);
   float far = 0;
-  EXPECT_TRUE(judge_face(lifted, n, s, q, sizing, 0.08, &far) & kFaceFar);
+  EXPECT_TRUE(judge_face(lifted, n, {s, q, sizing}, 0.08, &far) & kFaceFar);
   EXPECT_GT(far, 0.08f);
   n.kind[1] = NodeKind::interior;
-  EXPECT_EQ(judge_face(out, n, s, q, sizing, 0.08), kFaceInterior);
+  EXPECT_EQ(judge_face(out, n, {s, q, sizing}, 0.08), kFaceInterior);
 }
 
 }  // namespace

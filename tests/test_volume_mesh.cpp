@@ -17,7 +17,7 @@
 #include "mesher/quality/mesh_check.h"
 #include "mesher/placement/node_placement.h"
 #include "mesher/delaunay/predicates.h"
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 #include "mesher/volume/volume_mesh.h"
 #include "tests/support/icosphere.h"
 
@@ -217,9 +217,9 @@ TEST(VolumeMesh, BoxPassesEveryCheck) {
   const SurfaceQuery q(s.mesh);
   const SizingField h = uniform_size(s, 1.0 / 6);
   const NodeSet nodes = voxel_nodes(vx, s, q, 6);
-  const VolumeMesh vm = mesh_volume(s, q, h, nodes);
+  const VolumeMesh vm = mesh_volume({s, q, h}, nodes);
   expect_basic_invariants(vm);
-  const MeshCheck c = check_volume_mesh(vm, s, q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, q, h});
   EXPECT_TRUE(c.ok()) << failures(c);
   EXPECT_EQ(c.nonpositive_tets + c.outside_tets + c.offsurface_vertices + c.offsurface_faces +
                 c.open_edges + c.nonmanifold_vertices, 0u);
@@ -249,9 +249,9 @@ TEST(VolumeMesh, TwoBoxesGiveTwoRegions) {
   ASSERT_EQ(s.num_bodies, 2u);
   const SurfaceQuery q(s.mesh);
   const SizingField h = uniform_size(s, 0.2);
-  const VolumeMesh vm = mesh_volume(s, q, h, voxel_nodes(vx, s, q, 5));
+  const VolumeMesh vm = mesh_volume({s, q, h}, voxel_nodes(vx, s, q, 5));
   expect_basic_invariants(vm);
-  const MeshCheck c = check_volume_mesh(vm, s, q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, q, h});
   EXPECT_TRUE(c.ok()) << failures(c);
   EXPECT_NEAR(c.mesh_volume, 2.0, 1e-12);
   // Each tet's region is the body whose box holds its centroid: body of shell 0 is the
@@ -280,9 +280,9 @@ TEST(VolumeMesh, BoxWithVoid) {
   ASSERT_DOUBLE_EQ(s.volume, 26.0);
   const SurfaceQuery q(s.mesh);
   const SizingField h = uniform_size(s, 0.5);
-  const VolumeMesh vm = mesh_volume(s, q, h, voxel_nodes(vx, s, q, 2));
+  const VolumeMesh vm = mesh_volume({s, q, h}, voxel_nodes(vx, s, q, 2));
   expect_basic_invariants(vm);
-  const MeshCheck c = check_volume_mesh(vm, s, q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, q, h});
   EXPECT_TRUE(c.ok()) << failures(c);
   EXPECT_NEAR(c.mesh_volume, 27.0 - 1.0, 1e-11);
   for (std::size_t t = 0; t < vm.num_tets(); ++t) {
@@ -360,9 +360,9 @@ TEST(VolumeMesh, PolygonalCylinder) {
         for (double& x : p) x += rng.uniform(-0.15, 0.15) * hsize;
         if (q.side(p) == 1 && q.distance(p) >= 0.8 * hsize) nodes.push_back(p, NodeKind::interior, kNoFacet, float(hsize));
       }
-  const VolumeMesh vm = mesh_volume(s, q, h, nodes);
+  const VolumeMesh vm = mesh_volume({s, q, h}, nodes);
   expect_basic_invariants(vm);
-  const MeshCheck c = check_volume_mesh(vm, s, q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, q, h});
   EXPECT_TRUE(c.ok()) << failures(c);
   EXPECT_NEAR(c.mesh_volume, 8 * std::sin(pi / 8), 1e-12);
   EXPECT_LT(c.max_hausdorff, 1e-12);
@@ -381,7 +381,7 @@ TEST(VolumeMesh, ConcaveEdgeNeedsSteinerPoints) {
   const NodeSet nodes = voxel_nodes(vx, s, q, m, 7, [](const double* p) {
     return std::fabs(p[0] - 1) < 1e-9 && std::fabs(p[1] - 1) < 1e-9 && p[2] > 1e-9 && p[2] < 1 - 1e-9;
   });
-  const VolumeMesh vm = mesh_volume(s, q, h, nodes);
+  const VolumeMesh vm = mesh_volume({s, q, h}, nodes);
   expect_basic_invariants(vm);
   EXPECT_GT(vm.stats.steiner_points, 0u);
   EXPECT_GE(vm.stats.rounds, 1);
@@ -394,7 +394,7 @@ TEST(VolumeMesh, ConcaveEdgeNeedsSteinerPoints) {
     on_edge += vm.nodes.kind[i] == NodeKind::edge && p[0] == 1 && p[1] == 1;
   }
   EXPECT_GT(on_edge, 0u);
-  const MeshCheck c = check_volume_mesh(vm, s, q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, q, h});
   EXPECT_TRUE(c.ok()) << failures(c);
   EXPECT_LT(c.volume_error, 0.005);
 }
@@ -435,14 +435,14 @@ TEST(VolumeMesh, InteriorNodeTooCloseToSurfaceIsDropped) {
   NodeSet nodes = voxel_nodes(vx, s, q, 2);
   const double p[3] = {0.99, 1.26, 1.24};
   nodes.push_back(p, NodeKind::interior, kNoFacet, 0.5f);
-  const VolumeMesh vm = mesh_volume(s, q, h, nodes);
+  const VolumeMesh vm = mesh_volume({s, q, h}, nodes);
   expect_basic_invariants(vm);
   EXPECT_GE(vm.stats.dropped_nodes, 1u);
   EXPECT_EQ(vm.nodes.points.size(), nodes.points.size() - vm.stats.dropped_nodes + vm.stats.steiner_points);
   for (std::size_t i = 0; i < vm.nodes.points.size(); ++i)
     EXPECT_FALSE(vm.nodes.points.p(std::uint32_t(i))[0] == p[0] && vm.nodes.points.p(std::uint32_t(i))[1] == p[1])
         << "the close node survived";
-  const MeshCheck c = check_volume_mesh(vm, s, q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, q, h});
   EXPECT_TRUE(c.ok()) << failures(c);
   EXPECT_NEAR(c.mesh_volume, 26.0, 1e-11);
 }
@@ -464,7 +464,7 @@ TEST(VolumeMesh, RegressionFandiskBuriedSurfaceNodeBecomesInterior) {
   std::uint32_t facet = kNoFacet;
   q.closest(p, cp, &facet);
   nodes.push_back(p, NodeKind::surface, facet, 0.25f);
-  VolumeMesh vm = mesh_volume(s, q, h, nodes);
+  VolumeMesh vm = mesh_volume({s, q, h}, nodes);
   expect_basic_invariants(vm);
   EXPECT_EQ(vm.stats.buried_nodes, 1u);
   std::vector<char> on_boundary(vm.nodes.size_count(), 0);
@@ -480,11 +480,11 @@ TEST(VolumeMesh, RegressionFandiskBuriedSurfaceNodeBecomesInterior) {
   const double before = summarize_quality(to_tet_mesh(vm)).min_dihedral;
   ImproveOptions o;
   o.threads = 1;
-  improve_mesh(vm, s, q, h, o);
+  improve_mesh(vm, {s, q, h}, o);
   const double after = summarize_quality(to_tet_mesh(vm)).min_dihedral;
   EXPECT_LT(before, 1.0);  // the flat tets under the top face
   EXPECT_GE(after, 12.0);
-  const MeshCheck c = check_volume_mesh(vm, s, q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, q, h});
   EXPECT_TRUE(c.ok()) << failures(c);
 }
 
@@ -493,7 +493,7 @@ TEST(VolumeMesh, ToTetMeshCarriesTheData) {
   const PreparedSurface s = voxel_surface(vx);
   const SurfaceQuery q(s.mesh);
   const SizingField h = uniform_size(s, 0.25);
-  const VolumeMesh vm = mesh_volume(s, q, h, voxel_nodes(vx, s, q, 4));
+  const VolumeMesh vm = mesh_volume({s, q, h}, voxel_nodes(vx, s, q, 4));
   const TetMesh tm = to_tet_mesh(vm);
   EXPECT_EQ(tm.tets, vm.tets);
   ASSERT_EQ(tm.point_data.size(), 2u);
@@ -525,14 +525,14 @@ TEST(VolumeMesh, BadOptionsAndNodeSets) {
   NodeSet nodes = voxel_nodes(vx, s, q, 2);
   NodeSet broken = nodes;
   broken.kind.pop_back();
-  EXPECT_THROW(mesh_volume(s, q, h, broken), UsageError);
+  EXPECT_THROW(mesh_volume({s, q, h}, broken), UsageError);
   VolumeMeshOptions o;
   o.hausdorff_tolerance = 0;
-  EXPECT_THROW(mesh_volume(s, q, h, nodes, o), UsageError);
+  EXPECT_THROW(mesh_volume({s, q, h}, nodes, o), UsageError);
   NodeSet nan = nodes;
   nan.points.xyz[3 * 2 + 1] = std::nan("");
   try {
-    mesh_volume(s, q, h, nan);
+    mesh_volume({s, q, h}, nan);
     ADD_FAILURE() << "expected GeometryError";
   } catch (const GeometryError& e) {
     EXPECT_NE(std::string(e.what()).find("node 2 "), std::string::npos) << e.what();
@@ -543,7 +543,7 @@ TEST(VolumeMesh, BadOptionsAndNodeSets) {
     const double p[3] = {5.0 + (i & 1), 5.0 + ((i >> 1) & 1), 5.0 + (i >> 2)};
     far.push_back(p, NodeKind::interior, kNoFacet, 0.5f);
   }
-  EXPECT_THROW(mesh_volume(s, q, h, far), GeometryError);
+  EXPECT_THROW(mesh_volume({s, q, h}, far), GeometryError);
 }
 
 // With no Steiner rounds allowed, the notch case cannot be recovered: GeometryError naming
@@ -560,7 +560,7 @@ TEST(VolumeMesh, UnrecoverableBoundaryThrowsNamingTheFaces) {
   VolumeMeshOptions o;
   o.max_steiner_rounds = 0;
   try {
-    mesh_volume(s, q, h, nodes, o);
+    mesh_volume({s, q, h}, nodes, o);
     FAIL() << "expected GeometryError";
   } catch (const GeometryError& e) {
     EXPECT_NE(std::string(e.what()).find("face at ("), std::string::npos) << e.what();
@@ -578,10 +578,10 @@ TEST(VolumeMesh, PipelineWithPlacedNodes) {
   const SurfaceQuery q(s.mesh);
   const SizingField h = uniform_size(s, 0.125);
   const FeatureEdges fe = detect_sharp_edges(s.mesh, 30);
-  const NodeSet nodes = place_nodes(s, q, fe, h);
-  const VolumeMesh vm = mesh_volume(s, q, h, nodes);
+  const NodeSet nodes = place_nodes({s, q, h}, fe);
+  const VolumeMesh vm = mesh_volume({s, q, h}, nodes);
   expect_basic_invariants(vm);
-  const MeshCheck c = check_volume_mesh(vm, s, q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, q, h});
   EXPECT_TRUE(c.ok()) << failures(c);
   EXPECT_LT(c.volume_error, 1e-9);
 }
@@ -594,10 +594,10 @@ TEST(VolumeMesh, PipelineOnIcosphere) {
   const PreparedSurface s = prepare_surface(test::icosphere(2), "icosphere");
   const SurfaceQuery q(s.mesh);
   const SizingField h = uniform_size(s, 0.12);
-  const NodeSet nodes = place_nodes(s, q, detect_sharp_edges(s.mesh, 30), h);
-  const VolumeMesh vm = mesh_volume(s, q, h, nodes);
+  const NodeSet nodes = place_nodes({s, q, h}, detect_sharp_edges(s.mesh, 30));
+  const VolumeMesh vm = mesh_volume({s, q, h}, nodes);
   expect_basic_invariants(vm);
-  const MeshCheck c = check_volume_mesh(vm, s, q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, q, h});
   EXPECT_TRUE(c.ok()) << failures(c);
   EXPECT_LT(c.volume_error, 1e-9);
 }
@@ -611,8 +611,8 @@ class CheckNegative : public ::testing::Test {
     s = voxel_surface(vx);
     q = std::make_unique<SurfaceQuery>(s.mesh);
     h = uniform_size(s, 0.25);
-    vm = mesh_volume(s, *q, h, voxel_nodes(vx, s, *q, 4));
-    ASSERT_TRUE(check_volume_mesh(vm, s, *q, h).ok());
+    vm = mesh_volume({s, *q, h}, voxel_nodes(vx, s, *q, 4));
+    ASSERT_TRUE(check_volume_mesh(vm, {s, *q, h}).ok());
   }
   static bool mentions(const MeshCheck& c, const std::string& what) {
     for (auto& f : c.failures)
@@ -638,7 +638,7 @@ TEST_F(CheckNegative, MissingTet) {
   ASSERT_LT(victim, vm.num_tets());
   vm.tets.erase(vm.tets.begin() + 4 * std::ptrdiff_t(victim), vm.tets.begin() + 4 * std::ptrdiff_t(victim) + 4);
   vm.tet_region.erase(vm.tet_region.begin() + std::ptrdiff_t(victim));
-  const MeshCheck c = check_volume_mesh(vm, s, *q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, *q, h});
   EXPECT_FALSE(c.ok());
   EXPECT_GE(c.offsurface_vertices, 4u);  // the victim's four interior vertices
   EXPECT_GE(c.offsurface_faces, 4u);
@@ -651,7 +651,7 @@ TEST_F(CheckNegative, MissingBoundaryTetIsAnOpenBoundaryAtTheSurface) {
   const std::size_t victim = vm.boundary_tet[0];
   vm.tets.erase(vm.tets.begin() + 4 * std::ptrdiff_t(victim), vm.tets.begin() + 4 * std::ptrdiff_t(victim) + 4);
   vm.tet_region.erase(vm.tet_region.begin() + std::ptrdiff_t(victim));
-  const MeshCheck c = check_volume_mesh(vm, s, *q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, *q, h});
   EXPECT_FALSE(c.ok());
   EXPECT_GT(c.offsurface_faces + c.offsurface_vertices, 0u) << failures(c);
 }
@@ -672,7 +672,7 @@ TEST_F(CheckNegative, ExtraOutsideTet) {
   vm.tets.insert(vm.tets.end(), {f[0], f[1], f[2], id});
   vm.tet_region.push_back(0);
   ASSERT_GT(pred::orient3d(vm.nodes.points.p(f[0]), vm.nodes.points.p(f[1]), vm.nodes.points.p(f[2]), apex), 0);
-  const MeshCheck c = check_volume_mesh(vm, s, *q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, *q, h});
   EXPECT_FALSE(c.ok());
   EXPECT_EQ(c.outside_tets, 1u);
   EXPECT_EQ(c.nonpositive_tets, 0u);
@@ -688,7 +688,7 @@ TEST_F(CheckNegative, ExtraOutsideTet) {
 // Swapping two vertices of one tet inverts it.
 TEST_F(CheckNegative, InvertedTet) {
   std::swap(vm.tets[4 * 5 + 0], vm.tets[4 * 5 + 1]);
-  const MeshCheck c = check_volume_mesh(vm, s, *q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, *q, h});
   EXPECT_FALSE(c.ok());
   EXPECT_EQ(c.nonpositive_tets, 1u);
   EXPECT_TRUE(mentions(c, "not positively oriented (exact orient3d <= 0), e.g. tet 5")) << failures(c);
@@ -716,7 +716,7 @@ TEST_F(CheckNegative, ZeroVolumeTetAtRoundingLevel) {
   vm.nodes.push_back(p, NodeKind::interior, kNoFacet, 1.0f);
   vm.tets[4 * 5 + 3] = std::uint32_t(vm.nodes.size_count() - 1);
   ASSERT_GT(pred::orient3d(a, b, c, p), 0);
-  const MeshCheck c2 = check_volume_mesh(vm, s, *q, h);
+  const MeshCheck c2 = check_volume_mesh(vm, {s, *q, h});
   EXPECT_FALSE(c2.ok());
   EXPECT_EQ(c2.flat_tets, 1u);
   EXPECT_TRUE(mentions(c2, "zero volume at rounding level")) << failures(c2);
@@ -760,7 +760,7 @@ TEST(CheckVolumeMesh, NonManifoldEdgeIsCounted) {
   const PreparedSurface s = voxel_surface(Voxels::block(2, 2, 1, 1.0));
   const SurfaceQuery q(s.mesh);
   const SizingField h = uniform_size(s, 1.0);
-  const MeshCheck c = check_volume_mesh(vm, s, q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, q, h});
   EXPECT_FALSE(c.ok());
   EXPECT_EQ(c.nonpositive_tets, 0u);
   EXPECT_EQ(c.open_edges, 1u) << failures(c);
@@ -775,7 +775,7 @@ TEST(CheckVolumeMesh, NonManifoldVertexIsCounted) {
   const PreparedSurface s = voxel_surface(Voxels::block(2, 2, 2, 1.0));
   const SurfaceQuery q(s.mesh);
   const SizingField h = uniform_size(s, 1.0);
-  const MeshCheck c = check_volume_mesh(vm, s, q, h);
+  const MeshCheck c = check_volume_mesh(vm, {s, q, h});
   EXPECT_FALSE(c.ok());
   EXPECT_EQ(c.open_edges, 0u) << failures(c);
   EXPECT_EQ(c.nonmanifold_vertices, 1u) << failures(c);

@@ -9,7 +9,7 @@
 #include <cstdint>
 
 #include "mesher/delaunay/predicates.h"
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 
 namespace kdmesh {
 

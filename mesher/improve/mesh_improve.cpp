@@ -21,7 +21,7 @@
 #include "mesher/improve/improve_smooth.h"
 #include "mesher/improve/improve_tets.h"
 #include "mesher/parallel_for.h"
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 
 namespace kdmesh {
 
@@ -346,9 +346,10 @@ SplitCounts split_pass(ImproveTets& m, SineCache& cache, double threshold, int m
 
 }  // namespace
 
-ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
-                          const SurfaceQuery& query, const SizingField& sizing,
-                          const ImproveOptions& options) {
+ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain, const ImproveOptions& options) {
+  const PreparedSurface& surface = domain.surface;
+  const SurfaceQuery& query = domain.query;
+  const SizingField& sizing = domain.sizing;
   if (!(options.work_angle > 0 && options.work_angle < 90))
     throw UsageError("improve_mesh: work_angle must be in (0, 90) degrees");
   if (options.rounds < 0) throw UsageError("improve_mesh: rounds must be >= 0");

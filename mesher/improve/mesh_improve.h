@@ -8,10 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "mesher/surface/surface_prepare.h"
-#include "mesher/surface/surface_query.h"
+#include "mesher/domain.h"
 #include "mesher/volume/volume_mesh.h"
-#include "sizing/sizing_field.h"
 
 namespace kdmesh {
 
@@ -104,12 +102,11 @@ struct ImproveStats {
 /// patches or within the tolerance on curved ones, feature nodes along their feature curve,
 /// corners never move; the boundary face
 /// list changes only where a cap is taken out or a boundary edge flipped, and then within the
-/// tolerance of the local size `sizing` gives; boundary_tet is recomputed); regions are kept;
+/// tolerance of the local size `domain.sizing` gives; boundary_tet is recomputed); regions are kept;
 /// nodes are added only by sliver and boundary-edge splits; the result depends only on the input and the
 /// options (not on the thread count: the pass makes no random choice). Throws UsageError for
 /// bad options.
-ImproveStats improve_mesh(VolumeMesh& mesh, const PreparedSurface& surface,
-                          const SurfaceQuery& query, const SizingField& sizing,
+ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain,
                           const ImproveOptions& options = {});
 
 }  // namespace kdmesh

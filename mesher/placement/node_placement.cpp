@@ -40,9 +40,11 @@ constexpr double kInteriorBeta = 0.75;
 
 }  // namespace
 
-NodeSet place_nodes(const PreparedSurface& surface, const SurfaceQuery& query,
-                    const FeatureEdges& features, const SizingField& sizing,
+NodeSet place_nodes(const Domain& domain, const FeatureEdges& features,
                     const PlacementOptions& options) {
+  const PreparedSurface& surface = domain.surface;
+  const SurfaceQuery& query = domain.query;
+  const SizingField& sizing = domain.sizing;
   if (!(options.interior_clearance >= 0) || !std::isfinite(options.interior_clearance))
     throw UsageError("node placement: interior_clearance must be a finite number >= 0, not " +
                      std::to_string(options.interior_clearance));

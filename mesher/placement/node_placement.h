@@ -6,10 +6,8 @@
 #include <string>
 
 #include "mesher/node_set.h"
-#include "mesher/surface/surface_prepare.h"
-#include "mesher/surface/surface_query.h"
+#include "mesher/domain.h"
 #include "sizing/features.h"
-#include "sizing/sizing_field.h"
 
 namespace kdmesh {
 
@@ -22,12 +20,11 @@ struct PlacementOptions {
   std::function<void(const std::string&, double)> progress;
 };
 
-/// Places nodes spaced as `sizing` asks: feature corners, then nodes along feature edges,
+/// Places nodes spaced as `domain.sizing` asks: feature corners, then nodes along feature edges,
 /// then on the surface facets, then in the interior. Every surface node lies exactly on its
 /// facet (up to rounding of its coordinates); interior nodes are strictly inside the solid.
 /// Deterministic for equal inputs and seed.
-NodeSet place_nodes(const PreparedSurface& surface, const SurfaceQuery& query,
-                    const FeatureEdges& features, const SizingField& sizing,
+NodeSet place_nodes(const Domain& domain, const FeatureEdges& features,
                     const PlacementOptions& options = {});
 
 }  // namespace kdmesh

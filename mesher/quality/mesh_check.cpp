@@ -3,7 +3,7 @@
 // own bookkeeping is trusted (mesh.boundary is only compared against the recomputed faces).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "mesher/quality/mesh_check.h"
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 
 #include <algorithm>
 #include <array>
@@ -45,9 +45,11 @@ bool MeshCheck::only_sizing_failures() const {
          failures.size() == std::size_t(offsurface_faces > 0) + std::size_t(volume_off);
 }
 
-MeshCheck check_volume_mesh(const VolumeMesh& mesh, const PreparedSurface& surface,
-                            const SurfaceQuery& query, const SizingField& sizing,
+MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
                             const MeshCheckOptions& options) {
+  const PreparedSurface& surface = domain.surface;
+  const SurfaceQuery& query = domain.query;
+  const SizingField& sizing = domain.sizing;
   MeshCheck c;
   const PointSet& pts = mesh.nodes.points;
   const std::size_t np = pts.size(), nt = mesh.num_tets();

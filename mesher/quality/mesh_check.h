@@ -5,10 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "mesher/surface/surface_prepare.h"
-#include "mesher/surface/surface_query.h"
+#include "mesher/domain.h"
 #include "mesher/volume/volume_mesh.h"
-#include "sizing/sizing_field.h"
 
 namespace kdmesh {
 
@@ -42,8 +40,7 @@ struct MeshCheckOptions {
   double volume_tolerance = 0.005;   ///< relative
 };
 
-MeshCheck check_volume_mesh(const VolumeMesh& mesh, const PreparedSurface& surface,
-                            const SurfaceQuery& query, const SizingField& sizing,
+MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
                             const MeshCheckOptions& options = {});
 
 }  // namespace kdmesh

@@ -108,9 +108,11 @@ ManifoldDefects manifold_defects(const std::vector<std::uint32_t>& verts) {
   return d;
 }
 
-std::uint8_t judge_face(const std::uint32_t* fv, const NodeSet& nodes, const PreparedSurface& surface,
-                        const SurfaceQuery& query, const SizingField& sizing, double tolerance,
-                        float* how_far) {
+std::uint8_t judge_face(const std::uint32_t* fv, const NodeSet& nodes, const Domain& domain,
+                        double tolerance, float* how_far) {
+  const PreparedSurface& surface = domain.surface;
+  const SurfaceQuery& query = domain.query;
+  const SizingField& sizing = domain.sizing;
   std::uint8_t w = 0;
   for (int j = 0; j < 3; ++j)
     if (nodes.kind[fv[j]] == NodeKind::interior) w |= kFaceInterior;
@@ -150,9 +152,7 @@ std::uint8_t judge_face(const std::uint32_t* fv, const NodeSet& nodes, const Pre
 }
 
 BoundaryJudgement judge_boundary(const BoundaryFaces& faces, const NodeSet& nodes,
-                                 const PreparedSurface& surface,
-                                 const SurfaceQuery& query, const SizingField& sizing,
-                                 double tolerance, FaceVerdicts* cache) {
+                                 const Domain& domain, double tolerance, FaceVerdicts* cache) {
   const std::size_t nf = faces.size();
   std::vector<std::uint8_t> why(nf, 0);  // kFace* bits
   std::vector<float> how_far(nf, 0);
@@ -166,7 +166,7 @@ BoundaryJudgement judge_boundary(const BoundaryFaces& faces, const NodeSet& node
   parallel_for(todo.size(), [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t k = b; k < e; ++k) {
       const std::size_t f = todo[k];
-      why[f] = judge_face(&faces.verts[3 * f], nodes, surface, query, sizing, tolerance, &how_far[f]);
+      why[f] = judge_face(&faces.verts[3 * f], nodes, domain, tolerance, &how_far[f]);
     }
   }, 256);
   if (cache)

@@ -10,9 +10,7 @@
 
 #include "core/tet_mesh.h"
 #include "mesher/node_set.h"
-#include "mesher/surface/surface_prepare.h"
-#include "mesher/surface/surface_query.h"
-#include "sizing/sizing_field.h"
+#include "mesher/domain.h"
 
 namespace kdmesh {
 
@@ -48,8 +46,8 @@ inline constexpr std::uint8_t kFaceAgainst = 4;   ///< normal against the closes
 
 /// Judges one face (3 point ids, normal (b-a)x(c-a) pointing out of the solid) by the rules of
 /// judge_boundary; writes its distance / h to *how_far (0 if a vertex is interior-kind).
-std::uint8_t judge_face(const std::uint32_t* fv, const NodeSet& nodes, const PreparedSurface& surface,
-                        const SurfaceQuery& query, const SizingField& sizing, double tolerance,
+std::uint8_t judge_face(const std::uint32_t* fv, const NodeSet& nodes, const Domain& domain,
+                        double tolerance,
                         float* how_far = nullptr);
 
 /// Judges each face: bad if (a) a vertex is interior-kind, (b) its centroid or an edge midpoint
@@ -64,9 +62,7 @@ std::uint8_t judge_face(const std::uint32_t* fv, const NodeSet& nodes, const Pre
 /// new ones took the recovery of triceratops.ply at diag/20 from 7 to 1 full judgement.
 class FaceVerdicts;
 BoundaryJudgement judge_boundary(const BoundaryFaces& faces, const NodeSet& nodes,
-                                 const PreparedSurface& surface,
-                                 const SurfaceQuery& query, const SizingField& sizing,
-                                 double tolerance, FaceVerdicts* cache = nullptr);
+                                 const Domain& domain, double tolerance, FaceVerdicts* cache = nullptr);
 
 /// Verdicts of judge_face by oriented face (the triple rotated to start at its smallest id).
 class FaceVerdicts {

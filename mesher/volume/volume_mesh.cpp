@@ -23,7 +23,7 @@
 #include "mesher/volume/boundary_faces.h"
 #include "mesher/surface/crease_points.h"
 #include "mesher/parallel_for.h"
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 
 namespace kdmesh {
 
@@ -48,7 +48,7 @@ DelaunayResult triangulate(const NodeSet& nodes, const VolumeMeshOptions& option
   return r;
 }
 
-/// True if the tet (4 point ids at v) is flat at rounding level (mesher/quality/quality.h).
+/// True if the tet (4 point ids at v) is flat at rounding level (mesher/tet_quality.h).
 bool flat_at_rounding(const PointSet& pts, const std::uint32_t* v) {
   return std::abs(volume_length(pts.p(v[0]), pts.p(v[1]), pts.p(v[2]), pts.p(v[3]))) <
          kZeroVolumeLength;
@@ -196,8 +196,8 @@ std::vector<std::uint8_t> classify(const Triangulation& tri, const NodeSet& node
 // its vertices have fewer non-manifold ones than before (no more, if it started from a bad
 // face, which is gone); else it is undone. Sequential in tet order (deterministic); tets next to
 // a kept cluster are retried until nothing changes. Returns the number of tets taken out.
-std::size_t peel_folds(const Triangulation& tri, const NodeSet& nodes, const PreparedSurface& surface,
-                       const SurfaceQuery& query, const SizingField& sizing, double tolerance,
+std::size_t peel_folds(const Triangulation& tri, const NodeSet& nodes, const Domain& domain,
+                       double tolerance,
                        const BoundaryFaces& bf, const BoundaryJudgement& judge,
                        std::vector<std::uint8_t>& inside) {
   const std::size_t n = tri.num_tets();
@@ -212,7 +212,7 @@ std::size_t peel_folds(const Triangulation& tri, const NodeSet& nodes, const Pre
   auto bad_face = [&](std::uint32_t t, int i) {
     std::uint32_t fv[3];
     face_verts(t, i, fv);
-    return judge_face(fv, nodes, surface, query, sizing, tolerance) != 0;
+    return judge_face(fv, nodes, domain, tolerance) != 0;
   };
   // Candidates: the all-surface tets owning a bad face or a face at a non-manifold edge or
   // vertex.
@@ -444,8 +444,10 @@ NodeSet rebuild_nodes(const NodeSet& nodes, const std::vector<std::uint8_t>& dro
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
-VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query,
-                       const SizingField& sizing, NodeSet nodes, const VolumeMeshOptions& options) {
+VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes, const VolumeMeshOptions& options) {
+  const PreparedSurface& surface = domain.surface;
+  const SurfaceQuery& query = domain.query;
+  const SizingField& sizing = domain.sizing;
   const std::size_t n0 = nodes.points.size();
   if (nodes.kind.size() != n0 || nodes.facet.size() != n0 || nodes.size.size() != n0)
     throw UsageError("mesh_volume: the node set's kind/facet/size arrays (" +
@@ -504,13 +506,13 @@ VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query
     // the independent check more densely, so the margin keeps its verdict the same.
     const double tolerance = 0.8 * options.hausdorff_tolerance;
     bf = boundary_faces(dr.tri, inside);
-    BoundaryJudgement judge = judge_boundary(bf, nodes, surface, query, sizing, tolerance, &verdicts);
+    BoundaryJudgement judge = judge_boundary(bf, nodes, domain, tolerance, &verdicts);
     if (!judge.bad_faces.empty() || !judge.bad_vertices.empty() || !judge.bad_edges.empty()) {
-      const std::size_t peeled = peel_folds(dr.tri, nodes, surface, query, sizing, tolerance, bf, judge, inside);
+      const std::size_t peeled = peel_folds(dr.tri, nodes, domain, tolerance, bf, judge, inside);
       if (peeled > 0) {
         folds_peeled += peeled;
         bf = boundary_faces(dr.tri, inside);
-        judge = judge_boundary(bf, nodes, surface, query, sizing, tolerance, &verdicts);
+        judge = judge_boundary(bf, nodes, domain, tolerance, &verdicts);
       }
     }
     // Kept tets that are flat at rounding level (4 nodes coplanar up to rounding, e.g. lattice

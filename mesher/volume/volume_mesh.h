@@ -11,9 +11,7 @@
 #include "mesher/delaunay/delaunay.h"
 #include "mesher/node_set.h"
 #include "mesher/order/order.h"
-#include "mesher/surface/surface_prepare.h"
-#include "mesher/surface/surface_query.h"
-#include "sizing/sizing_field.h"
+#include "mesher/domain.h"
 
 namespace kdmesh {
 
@@ -69,8 +67,7 @@ struct VolumeMesh {
 /// inserts Steiner points on the surface where boundary faces miss it. Throws
 /// BoundaryRecoveryError (a GeometryError carrying the bad places) if the boundary cannot be
 /// recovered within max_steiner_rounds.
-VolumeMesh mesh_volume(const PreparedSurface& surface, const SurfaceQuery& query,
-                       const SizingField& sizing, NodeSet nodes,
+VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes,
                        const VolumeMeshOptions& options = {});
 
 /// The mesh as writers take it: points, tets, point data "node_kind" and "target_size",

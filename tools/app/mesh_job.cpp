@@ -30,7 +30,7 @@
 #include "mesher/delaunay/delaunay.h"
 #include "mesher/quality/mesh_check.h"
 #include "mesher/mesh_solid.h"
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 #include "mesher/reference/reference_delaunay.h"
 #include "mesher/reference/tet_compare.h"
 #include "tools/app/delaunay_verify.h"

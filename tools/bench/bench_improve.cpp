@@ -21,7 +21,7 @@
 #include "mesher/quality/mesh_check.h"
 #include "mesher/improve/mesh_improve.h"
 #include "mesher/placement/node_placement.h"
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 #include "mesher/surface/surface_prepare.h"
 #include "mesher/volume/volume_mesh.h"
 #include "sizing/features.h"
@@ -110,22 +110,22 @@ int run(int argc, char** argv) {
   const SurfaceQuery query(surface.mesh);
   PlacementOptions po;
   po.seed = job->seed;
-  NodeSet nodes = place_nodes(surface, query, features, sizing, po);
+  NodeSet nodes = place_nodes({surface, query, sizing}, features, po);
   const double t_prep = sw.seconds();
   sw.reset();
   double cpu0 = cpu_seconds();
   VolumeMeshOptions vo;
   vo.order = job->order;
   vo.order.seed = job->seed;
-  VolumeMesh mesh = mesh_volume(surface, query, sizing, std::move(nodes), vo);
+  VolumeMesh mesh = mesh_volume({surface, query, sizing}, std::move(nodes), vo);
   const double t_mesh = sw.seconds(), c_mesh = cpu_seconds() - cpu0;
   std::printf("job %s: %zu nodes, %zu tets; read..place %.2f s, mesh %.2f s (cpu %.2f s)\n",
               job->name.c_str(), mesh.nodes.size_count(), mesh.num_tets(), t_prep, t_mesh, c_mesh);
-  print_check("before", check_volume_mesh(mesh, surface, query, sizing));
+  print_check("before", check_volume_mesh(mesh, {surface, query, sizing}));
   print_by_surface_nodes("before", mesh);
 
   cpu0 = cpu_seconds();
-  const ImproveStats st = improve_mesh(mesh, surface, query, sizing, io);
+  const ImproveStats st = improve_mesh(mesh, {surface, query, sizing}, io);
   const double c_improve = cpu_seconds() - cpu0;
   std::printf("\n%-10s %8s %9s %9s %7s %8s %8s %8s %8s %8s\n", "stage", "ops", "min_dih", "max_dih",
               "gamma", "<5deg", "<10deg", "<12deg", ">165deg", "seconds");
@@ -138,7 +138,7 @@ int run(int argc, char** argv) {
               st.seconds, st.seconds / t_mesh, c_improve, c_improve / c_mesh, st.edge_removals, st.face_removals, st.smoothed,
               st.relaxed, st.boundary_changes);
   sw.reset();
-  const MeshCheck after = check_volume_mesh(mesh, surface, query, sizing);
+  const MeshCheck after = check_volume_mesh(mesh, {surface, query, sizing});
   print_check("after", after);
   print_by_surface_nodes("after", mesh);
   const QualitySummary q = summarize_quality(to_tet_mesh(mesh));

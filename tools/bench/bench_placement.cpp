@@ -117,7 +117,7 @@ int run(int argc, char** argv) {
     if (stage == "surface") t_surface = sw.seconds(), c_surface = cpu() - cpu0;
     stage = s;
   };
-  const NodeSet nodes = place_nodes(m.surface, query, m.features, sizing, po);
+  const NodeSet nodes = place_nodes({m.surface, query, sizing}, m.features, po);
   const double t_total = sw.seconds();
   const double cpu_total = cpu() - cpu0;
   std::size_t count[4] = {0, 0, 0, 0};
@@ -140,9 +140,9 @@ int run(int argc, char** argv) {
               cpu_total, double(nodes.size_count()) / cpu_total);
   if (!fidelity) return 0;
   sw.reset();
-  const VolumeMesh vm = mesh_volume(m.surface, query, sizing, nodes);
+  const VolumeMesh vm = mesh_volume({m.surface, query, sizing}, nodes);
   const double t_mesh = sw.seconds();
-  const MeshCheck check = check_volume_mesh(vm, m.surface, query, sizing);
+  const MeshCheck check = check_volume_mesh(vm, {m.surface, query, sizing});
   std::printf("mesh: %.3f s, %zu tets, %zu Steiner points, %zu dropped nodes; check %s, volume "
               "error %.3g, max Hausdorff %.3g h\n",
               t_mesh, vm.num_tets(), vm.stats.steiner_points, vm.stats.dropped_nodes,

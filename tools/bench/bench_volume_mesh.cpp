@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
 
   VolumeMeshOptions vo;
   sw.reset();
-  const VolumeMesh vm = mesh_volume(s, q, sizing, nodes, vo);
+  const VolumeMesh vm = mesh_volume({s, q, sizing}, nodes, vo);
   const double total = sw.seconds();
   const VolumeMeshStats& st = vm.stats;
   std::printf("tets             %zu inside; %zu classified over %d round(s)\n", vm.num_tets(),
@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
               total / (st.order_seconds + st.delaunay_seconds), total / st.delaunay_seconds);
   if (check) {
     sw.reset();
-    const MeshCheck c = check_volume_mesh(vm, s, q, sizing);
+    const MeshCheck c = check_volume_mesh(vm, {s, q, sizing});
     std::printf("check            %.3f s: %s; volume error %.3g, max hausdorff %.3g h\n", sw.seconds(),
                 c.ok() ? "ok" : "FAILED", c.volume_error, c.max_hausdorff);
     for (auto& f : c.failures) std::printf("  %s\n", f.c_str());

@@ -51,7 +51,7 @@
 #include "mesher/delaunay/delaunay.h"
 #include "mesher/order/order.h"
 #include "mesher/delaunay/predicates.h"
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 #include "mesher/reference/reference_delaunay.h"
 #include "mesher/quality/size_fidelity.h"
 #include "mesher/surface/surface_query.h"

@@ -119,7 +119,7 @@ TetgenRun run_tetgen(const PreparedSurface& surface, const PointSet& holes,
                      double timeout_seconds = 0);
 
 /// The comparison's measures of one mesh, the same for both sides:
-///   nodes (points used by a tet), tets, quality (mesher/quality/quality.h summarize_quality: tets,
+///   nodes (points used by a tet), tets, quality (mesher/tet_quality.h summarize_quality: tets,
 ///   inverted, min/max dihedral, mean/min radius ratio, max radius-edge, volume-length),
 ///   min_dihedral_below {"5", "10", "12"} (tets whose smallest dihedral is below, degrees),
 ///   volume {mesh, solid, relative_error}, size_fidelity (mesher/quality/size_fidelity.h against

@@ -1,7 +1,7 @@
 // kdmesh — tetrahedron shape measures (dihedral angles, radius ratio, radius-edge ratio,
 // volume-length ratio) and their mesh-wide summaries.
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "mesher/quality/quality.h"
+#include "mesher/tet_quality.h"
 
 #include <algorithm>
 #include <cmath>
