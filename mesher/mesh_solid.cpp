@@ -60,9 +60,10 @@ class Job {
 };
 
 /// prepare_surface, with a hint in the error when an opt-in repair would fix the defect.
-PreparedSurface prepare_with_hint(SurfaceMesh raw, const MeshParams& params, const SurfaceOptions& so) {
+PreparedSurface prepare_with_hint(SurfaceMesh raw, const std::string& input, const MeshParams& params,
+                                  const SurfaceOptions& so) {
   try {
-    return prepare_surface(std::move(raw), params.input, so);
+    return prepare_surface(std::move(raw), input, so);
   } catch (const SurfaceError& e) {
     const char* repair = nullptr;
     switch (e.defect()) {
@@ -296,25 +297,55 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
   }
 }
 
-/// Read, repair (opt-in) and prepare the surface; fills the surface figures of the report.
-PreparedSurface prepare(const Job& job, SurfaceMesh raw, const ModelRanges& ranges) {
+/// Repairs (opt-in) and prepares one surface, read from `input`.
+PreparedSurface prepare_one(const Job& job, SurfaceMesh raw, const std::string& input, const SurfaceOptions& so) {
+  const MeshParams& params = job.params;
+  MeshReport& report = job.report;
+  if (params.repair.any()) {
+    SurfaceRepairReport rep;
+    raw = repair_surface(std::move(raw), params.repair, rep);
+    for (const std::string& n : rep.notes) so.notice(n);
+    if (rep.changed()) so.notice("facet ids in later messages about " + input + " refer to the repaired surface");
+    if (!report.repairs) report.repairs = SurfaceRepairReport{};
+    SurfaceRepairReport& all = *report.repairs;  // summed over the bodies
+    all.removed_collapsed += rep.removed_collapsed;
+    all.split_caps += rep.split_caps;
+    all.unfixed_caps += rep.unfixed_caps;
+    all.removed_duplicates += rep.removed_duplicates;
+    all.flipped += rep.flipped;
+    all.notes.insert(all.notes.end(), rep.notes.begin(), rep.notes.end());
+  }
+  return prepare_with_hint(std::move(raw), input, params, so);
+}
+
+/// Repairs (opt-in) and prepares the surface, or each named body's and joins them; fills the
+/// surface figures of the report.
+PreparedSurface prepare(const Job& job, std::vector<NamedSurface> bodies, bool named, const ModelRanges& ranges) {
   const MeshParams& params = job.params;
   MeshReport& report = job.report;
   Stopwatch clock;
-  job.log("preparing the surface (" + std::to_string(raw.points.size()) + " points, " +
-          std::to_string(raw.num_tris()) + " facets)");
+  std::size_t points = 0, facets = 0;
+  for (const NamedSurface& b : bodies) points += b.surface.points.size(), facets += b.surface.num_tris();
+  job.log("preparing the surface (" + std::to_string(points) + " points, " + std::to_string(facets) + " facets" +
+          (named ? ", " + std::to_string(bodies.size()) + " named bodies)" : ")"));
   if (!ranges.note.empty()) job.notice(ranges.note);
   SurfaceOptions so;
   so.scale = params.scale;
   so.notice = [&job](const std::string& n) { job.notice(n); };
-  if (params.repair.any()) {
-    SurfaceRepairReport rep;
-    raw = repair_surface(std::move(raw), params.repair, rep);
-    report.repairs = rep;
-    for (const std::string& n : rep.notes) so.notice(n);
-    if (rep.changed()) so.notice("facet ids in later messages refer to the repaired surface");
+  PreparedSurface surface;
+  if (!named) {
+    surface = prepare_one(job, std::move(bodies[0].surface), params.input, so);
+  } else {
+    std::vector<PreparedSurface> parts;
+    std::vector<std::string> names, inputs;
+    for (NamedSurface& b : bodies) {
+      parts.push_back(prepare_one(job, std::move(b.surface), b.input, so));
+      report.bodies.push_back({b.name, b.input, parts.back().volume, 0, 0, 0});
+      names.push_back(b.name);
+      inputs.push_back(b.input);
+    }
+    surface = join_bodies(std::move(parts), names, inputs);
   }
-  PreparedSurface surface = prepare_with_hint(std::move(raw), params, so);
   report.seconds["prepare"] = clock.seconds();
   report.counts.surface_points = surface.mesh.points.size();
   report.counts.surface_facets = surface.mesh.num_tris();
@@ -324,6 +355,38 @@ PreparedSurface prepare(const Job& job, SurfaceMesh raw, const ModelRanges& rang
   for (int k = 0; k < 3; ++k) report.bbox_min[k] = surface.bbox_min[k], report.bbox_max[k] = surface.bbox_max[k];
   report.has_surface = true;
   return surface;
+}
+
+/// Each named body's region against its solid: volumes and tet counts into the report; a
+/// region whose volume is off beyond the check's tolerance is a failure of the check.
+void check_body_volumes(const Job& job, const VolumeMesh& mesh, MeshCheck& check) {
+  std::vector<MeshReport::Body>& bodies = job.report.bodies;
+  if (bodies.empty()) return;
+  for (MeshReport::Body& b : bodies) b.mesh_volume = 0, b.tets = 0;
+  const PointSet& p = mesh.nodes.points;
+  for (std::size_t t = 0; t < mesh.num_tets(); ++t) {
+    const std::uint32_t* v = &mesh.tets[4 * t];
+    const std::uint32_t r = mesh.tet_region[t];
+    if (r >= bodies.size()) throw Error("internal error: tet " + std::to_string(t) + " in region " + std::to_string(r));
+    const double* a = p.p(v[0]);
+    double e[3][3];
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) e[i][k] = p.p(v[i + 1])[k] - a[k];
+    bodies[r].mesh_volume += (e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
+                              e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                              e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0])) / 6;
+    ++bodies[r].tets;
+  }
+  for (MeshReport::Body& b : bodies) {
+    b.volume_error = std::abs(b.mesh_volume - b.solid_volume) / b.solid_volume;
+    if (!(b.volume_error <= job.params.check.volume_tolerance)) {
+      std::ostringstream s;
+      s << "body '" << b.name << "': its region's volume " << b.mesh_volume << " is off its solid's "
+        << b.solid_volume << " by " << b.volume_error << " (tolerance " << job.params.check.volume_tolerance
+        << "), in " << b.tets << " tets";
+      check.failures.push_back(s.str());
+    }
+  }
 }
 
 /// The sharp features at the job's (crease-lowered) angle, with the creases' notice.
@@ -398,8 +461,10 @@ FeMesh fe_groups(const Job& job, const PreparedSurface& surface, const SurfaceQu
     for (const std::string& p : bg.problems) what += "\n  " + p;
     throw CheckError(what + "\nno output was written");
   }
+  GroupOptions go = params.group_options;
+  for (const MeshReport::Body& b : report.bodies) go.body_names.push_back(b.name);
   FeMesh fe = make_fe_mesh(mesh, bg, make_groups(params.groups, surface.mesh, patches, params.sizing.zones,
-                                                 surface.num_bodies, params.group_options));
+                                                 surface.num_bodies, go));
   if (params.element_order == 2) {
     job.log("quadratic elements");
     report.quadratic = make_quadratic(fe, surface.mesh, query, patches);
@@ -409,15 +474,23 @@ FeMesh fe_groups(const Job& job, const PreparedSurface& surface, const SurfaceQu
   return fe;
 }
 
-MeshResult run(const Job& job, SurfaceMesh raw) {
+MeshResult run(const Job& job, std::vector<NamedSurface> bodies, bool named) {
   const MeshParams& params = job.params;
   MeshReport& report = job.report;
   check_mesh_params(params);  // before any work: numbers in the range the pipeline computes in
   Stopwatch clock;
   // Coordinates after scaling, sizes against the model; the default min_size is raised to
   // the smallest the mesher resolves.
-  const ModelRanges ranges = check_model_ranges(params, raw);
-  const PreparedSurface surface = prepare(job, std::move(raw), ranges);
+  ModelRanges ranges;
+  if (bodies.size() == 1) {
+    ranges = check_model_ranges(params, bodies[0].surface);
+  } else {
+    SurfaceMesh all;  // the points are what counts
+    for (const NamedSurface& b : bodies)
+      all.points.xyz.insert(all.points.xyz.end(), b.surface.points.xyz.begin(), b.surface.points.xyz.end());
+    ranges = check_model_ranges(params, all);
+  }
+  const PreparedSurface surface = prepare(job, std::move(bodies), named, ranges);
   const AutoTerms terms = automatic_terms(params, surface);
   const FeatureEdges features = find_features(job, surface, terms);
 
@@ -433,6 +506,7 @@ MeshResult run(const Job& job, SurfaceMesh raw) {
   sizing_options.feature_angle_deg = terms.feature_angle;
   thickness_sizes(job, surface, query, ranges.size, sizing_options);
   Meshed m = mesh_with_refinement(job, surface, query, features, sizing_options);
+  check_body_volumes(job, m.mesh, m.check);
   report.check = m.check;
   report.has_check = true;
 
@@ -470,7 +544,29 @@ MeshResult mesh_solid(SurfaceMesh surface, const MeshParams& params, const MeshC
   MeshReport& r = report ? *report : local;
   r = MeshReport{};
   const Job job(params, callbacks, r);
-  MeshResult result = run(job, std::move(surface));
+  std::vector<NamedSurface> one(1);
+  one[0].surface = std::move(surface);
+  MeshResult result = run(job, std::move(one), false);
+  result.report = r;
+  return result;
+}
+
+MeshResult mesh_solid(std::vector<NamedSurface> bodies, const MeshParams& params, const MeshCallbacks& callbacks,
+                      MeshReport* report) {
+  if (bodies.empty()) throw UsageError("job '" + params.name + "': no bodies to mesh");
+  for (const NamedSurface& b : bodies)
+    if (b.name.empty() || b.name.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_-") !=
+                              std::string::npos)
+      throw UsageError("job '" + params.name + "': body name '" + b.name + "' must be [A-Za-z0-9_-]+");
+  for (std::size_t i = 0; i < bodies.size(); ++i)
+    for (std::size_t k = 0; k < i; ++k)
+      if (bodies[i].name == bodies[k].name)
+        throw UsageError("job '" + params.name + "': body '" + bodies[i].name + "' is listed twice");
+  MeshReport local;
+  MeshReport& r = report ? *report : local;
+  r = MeshReport{};
+  const Job job(params, callbacks, r);
+  MeshResult result = run(job, std::move(bodies), true);
   result.report = r;
   return result;
 }

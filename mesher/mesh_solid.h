@@ -25,6 +25,7 @@
 #include "mesher/tet_quality.h"
 #include "mesher/resource_estimate.h"
 #include "mesher/quality/size_fidelity.h"
+#include "mesher/surface/surface_bodies.h"
 #include "mesher/surface/surface_repair.h"
 #include "mesher/surface/thickness_sizes.h"
 #include "mesher/volume/volume_mesh.h"
@@ -143,6 +144,14 @@ struct MeshReport {
   /// The volume mesher's own stages (order, delaunay, first_delaunay, classify, recover).
   std::map<std::string, double> mesh_stages;
   std::vector<std::string> notices;
+  /// Named bodies (mesh_solid on a list of them), one per region, in region order: the solid's
+  /// volume, the mesh's volume and tets in that region (filled with the mesh check).
+  struct Body {
+    std::string name, input;
+    double solid_volume = 0, mesh_volume = 0, volume_error = 0;  ///< error: |mesh - solid| / solid
+    std::size_t tets = 0;
+  };
+  std::vector<Body> bodies;
 };
 
 struct MeshResult {
@@ -169,6 +178,17 @@ void check_mesh_params(const MeshParams& params);
 /// is given it is filled as the job goes, so that after an exception it holds what was
 /// measured up to the failure (on success it equals the result's report).
 MeshResult mesh_solid(SurfaceMesh surface, const MeshParams& params,
+                      const MeshCallbacks& callbacks = {}, MeshReport* report = nullptr);
+
+/// Meshes several named solids together (a job's `bodies`): region k of the mesh is bodies[k].
+/// Each body's surface is repaired (opt-in) and prepared on its own, so that its errors name
+/// its own input and facet ids; then they are joined (join_bodies): bodies whose surfaces meet
+/// or that overlap are refused with a BodyContactError naming both and a point. Besides the
+/// whole mesh's check, each region's volume must match its body's within
+/// params.check.volume_tolerance (else CheckError); MeshReport::bodies has the figures, and with
+/// fe_groups the volume groups carry the bodies' names. Throws UsageError for an empty list,
+/// or a body name that is empty, repeated or not [A-Za-z0-9_-]+.
+MeshResult mesh_solid(std::vector<NamedSurface> bodies, const MeshParams& params,
                       const MeshCallbacks& callbacks = {}, MeshReport* report = nullptr);
 
 }  // namespace kdmesh

@@ -396,6 +396,57 @@ TEST(JobConfig, InputMayBeAnySurfaceFormatReadSurfaceReads) {
   EXPECT_TRUE(contains(e.what(), "'parts/block.dae' is not an .stl, .ply, .obj or .off file")) << e.what();
 }
 
+// `bodies` (issue 21): named solids, each its own file resolved like `input`; the job's input
+// lists them; names and files are checked with the line at fault.
+TEST(JobConfig, BodiesListNamedSolidsEachFromItsOwnFile) {
+  const fs::path file = write_batch(R"(jobs:
+  - name: gearbox
+    size: 2
+    bodies:
+      - {name: housing, input: parts/block.stl}
+      - {name: gear_1, input: parts/gear.stl}
+    output: {vtu: gb.vtu}
+)");
+  std::ofstream(file.parent_path() / "parts" / "gear.stl") << "solid x\nendsolid x\n";
+  const BatchConfig c = kdmesh::load_batch_config(file.string());
+  ASSERT_EQ(c.jobs.size(), 1u);
+  const kdmesh::MeshJob& j = c.jobs[0];
+  ASSERT_EQ(j.bodies.size(), 2u);
+  EXPECT_EQ(j.bodies[0].name, "housing");
+  EXPECT_EQ(j.bodies[1].name, "gear_1");
+  EXPECT_EQ(j.bodies[0].input, (file.parent_path() / "parts" / "block.stl").string());
+  EXPECT_EQ(j.bodies[1].input, (file.parent_path() / "parts" / "gear.stl").string());
+  EXPECT_EQ(j.input, j.bodies[0].input + " + " + j.bodies[1].input);
+
+  struct Bad {
+    const char* yaml;
+    unsigned line;
+    const char* says;
+  };
+  for (const Bad& b : {
+           Bad{"jobs:\n  - name: a\n    size: 1\n    input: parts/block.stl\n    bodies: [{name: x, input: parts/block.stl}]\n",
+               5, "give either 'input' (one surface) or 'bodies', not both"},
+           Bad{"jobs:\n  - name: a\n    size: 1\n    bodies: []\n", 4, "expected a non-empty list of {name, input}"},
+           Bad{"jobs:\n  - name: a\n    size: 1\n    bodies:\n      - {name: x}\n", 5, "bodies'[0]: missing required key 'input'"},
+           Bad{"jobs:\n  - name: a\n    size: 1\n    bodies:\n      - {name: x.y, input: parts/block.stl}\n", 5,
+               "'x.y' must be letters, digits, '_' and '-'"},
+           Bad{"jobs:\n  - name: a\n    size: 1\n    bodies:\n      - {name: x, input: parts/block.stl}\n"
+               "      - {name: x, input: parts/gear.stl}\n",
+               6, "body 'x' is listed twice"},
+           Bad{"jobs:\n  - name: a\n    size: 1\n    bodies:\n      - {name: x, input: parts/nothere.stl}\n", 5,
+               "nothere.stl' not found"},
+           Bad{"jobs:\n  - name: a\n    size: 1\n    bodies:\n      - {name: x, input: parts/block.stl, scale: 2}\n", 5,
+               "unknown key 'scale'"},
+           Bad{"jobs:\n  - name: a\n    size: 1\n    bodies:\n      - {name: x, input: parts/block.stl}\n"
+               "    output: {vtu: parts/block.stl}\n",
+               6, "input of body 'x'"},
+       }) {
+    const InputError e = load_error(b.yaml);
+    EXPECT_EQ(e.line(), b.line) << b.yaml;
+    EXPECT_TRUE(contains(e.what(), b.says)) << e.what();
+  }
+}
+
 TEST(JobConfig, YamlSyntaxErrorHasLineAndColumn) {
   const InputError e = load_error(R"(jobs:
   - name: a

@@ -683,8 +683,11 @@ std::vector<FeGroup> make_groups(const std::vector<GroupSpec>& specs, const Surf
                                  const std::vector<SizingZone>& zones, std::uint32_t num_bodies,
                                  const GroupOptions& options) {
   std::vector<FeGroup> out;
+  if (!options.body_names.empty() && options.body_names.size() != num_bodies)
+    throw UsageError("make_groups: " + std::to_string(options.body_names.size()) + " body names for " +
+                     std::to_string(num_bodies) + " bodies");
   for (std::uint32_t b = 0; b < num_bodies; ++b)
-    out.push_back({"body_" + std::to_string(b + 1), 3, {b}});
+    out.push_back({options.body_names.empty() ? "body_" + std::to_string(b + 1) : options.body_names[b], 3, {b}});
   const std::size_t nt = surface.num_tris();
   const std::size_t ncurves = patches.num_curves();
   double diag = 0;

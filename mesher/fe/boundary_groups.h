@@ -171,10 +171,12 @@ struct GroupOptions {
   bool patch_groups = false;   ///< add patch_<i> (dim 2, patch id i-1) for every patch
   bool curve_groups = false;   ///< add curve_<i> (dim 1, curve id i-1) for every curve
   double zone_tolerance = 0.25;  ///< in units of the zone's size (see GroupSpec)
+  /// The names of the volume groups, one per body (a job's named `bodies`); empty: body_<i>.
+  std::vector<std::string> body_names;
 };
 
-/// The named groups: `body_<i>` (dim 3, entity = tet_region i-1) for each of `num_bodies`
-/// bodies, then the user's specs in order, then the optional patch_<i> / curve_<i>.
+/// The named groups: one per body (dim 3, entity = tet_region i-1), `body_<i>` for each of
+/// `num_bodies` bodies or options.body_names (then as many as num_bodies), then the user's specs in order, then the optional patch_<i> / curve_<i>.
 /// Throws UsageError naming the spec (its name and origin) when it selects nothing, names an
 /// unknown zone, has a bad dim or name, or repeats a name of its dimension. A point
 /// selection equidistant (to 1e-9 relative) from two patches / curves is a UsageError too.

@@ -62,7 +62,8 @@ const std::vector<std::string> kJobKeys = {"name",        "input", "scale", "siz
                                            "seed",        "check", "max_memory", "repair", "groups",
                                            "patch_groups", "element_order", "msh_version", "improve", "output",
                                            "curvature_angle", "chordal_deviation", "auto_creases", "thickness_layers",
-                                           "tolerance", "max_refinements", "timeout"};
+                                           "tolerance", "max_refinements", "timeout", "bodies"};
+const std::vector<std::string> kBodyKeys = {"name", "input"};
 const std::vector<std::string> kZoneTypes = {"sharp_edges", "polyline", "segment", "plane",
                                              "point",       "box",      "ball"};
 const std::vector<std::string> kOutputKeys = {"vtu", "summary", "nodes", "msh", "inp", "mesh", "boundary_vtu", "xdmf", "exodus"};
@@ -338,6 +339,45 @@ class Loader {
     return g;
   }
 
+  /// A surface file: relative to the batch file's directory; must exist, with an extension
+  /// read_surface reads.
+  std::string surface_path(const YAML::Node& v, const std::string& what) const {
+    const fs::path given = string(v, what);
+    const fs::path p = (given.is_absolute() ? given : base_ / given).lexically_normal();
+    if (!is_surface_extension(p.extension().string()))
+      fail(v, what + ": '" + given.string() + "' is not an .stl, .ply, .obj or .off file");
+    std::error_code ec;
+    if (!fs::is_regular_file(p, ec))
+      fail(v, what + ": file '" + p.string() + "' not found" +
+                  (given.is_absolute() ? "" : " (relative paths are resolved against the batch file's directory)"));
+    return p.string();
+  }
+
+  /// `bodies`: a non-empty list of {name, input}, names [A-Za-z0-9_-]+ and distinct.
+  std::vector<BodyInput> bodies(const YAML::Node& list, const std::string& what) const {
+    if (!list.IsSequence() || list.size() == 0)
+      fail(list, what + ": expected a non-empty list of {name, input}, got " + describe(list));
+    std::vector<BodyInput> out;
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const std::string w = what + "[" + std::to_string(i) + "]";
+      const std::map<std::string, Entry> b = entries(list[i], kBodyKeys, w);
+      for (const char* req : {"name", "input"})
+        if (!b.count(req)) fail(list[i], w + ": missing required key '" + std::string(req) + "'");
+      BodyInput body;
+      body.name = string(b.at("name").value, w + ": key 'name'");
+      if (body.name.empty() || !std::all_of(body.name.begin(), body.name.end(), [](char c) {
+            return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
+          }))
+        fail(b.at("name").value, w + ": key 'name': '" + body.name +
+                                     "' must be letters, digits, '_' and '-' (it names a region in the solver formats)");
+      for (const BodyInput& o : out)
+        if (o.name == body.name) fail(b.at("name").value, w + ": key 'name': body '" + body.name + "' is listed twice");
+      body.input = surface_path(b.at("input").value, w + ": key 'input'");
+      out.push_back(std::move(body));
+    }
+    return out;
+  }
+
   /// Options of one job given in memory (parse_job): `name` may be absent ("mesh"), and so may
   /// `input` (the surface comes with them).
   void set_in_memory() { in_memory_ = true; }
@@ -359,20 +399,17 @@ class Loader {
     const std::string where = "job '" + job.name + "'";
     auto key = [&](const std::string& k) { return where + ": key '" + k + "'"; };
     for (const char* req : {"input", "size"})
-      if (!e.count(req) && !(in_memory_ && std::string(req) == "input"))
+      if (!e.count(req) && !(std::string(req) == "input" && (in_memory_ || e.count("bodies"))))
         fail(node, where + ": missing required key '" + std::string(req) + "'");
 
-    if (e.count("input")) {  // input: relative to the batch file's directory; must exist, a surface read_surface reads
-      const YAML::Node v = e.at("input").value;
-      const fs::path given = string(v, key("input"));
-      const fs::path p = (given.is_absolute() ? given : base_ / given).lexically_normal();
-      if (!is_surface_extension(p.extension().string()))
-        fail(v, key("input") + ": '" + given.string() + "' is not an .stl, .ply, .obj or .off file");
-      std::error_code ec;
-      if (!fs::is_regular_file(p, ec))
-        fail(v, key("input") + ": file '" + p.string() + "' not found" +
-                    (given.is_absolute() ? "" : " (relative paths are resolved against the batch file's directory)"));
-      job.input = p.string();
+    if (e.count("input") && e.count("bodies"))
+      fail(e.at("bodies").key, key("bodies") + ": give either 'input' (one surface) or 'bodies', not both");
+    if (e.count("input")) {
+      job.input = surface_path(e.at("input").value, key("input"));
+    } else if (e.count("bodies")) {
+      job.bodies = bodies(e.at("bodies").value, key("bodies"));
+      job.input.clear();
+      for (const BodyInput& b : job.bodies) job.input += (job.input.empty() ? "" : " + ") + b.input;
     } else {
       job.input.clear();  // given in memory: the caller names it
     }
@@ -598,7 +635,8 @@ class Loader {
     if (!clash) return;
     const YAML::Node at = jobs[owner[clash->second]];
     const PathUse& later = uses[clash->second];
-    fail(at["output"] && later.output ? at["output"] : at["input"] && !later.output ? at["input"] : at,
+    const YAML::Node in = at["input"] ? at["input"] : at["bodies"];
+    fail(at["output"] && later.output ? at["output"] : in && !later.output ? in : at,
          describe_path_clash(uses, *clash) +
              (uses[clash->first].output == later.output ? "" : " (the result would depend on the order of the jobs)"));
   }

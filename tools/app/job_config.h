@@ -14,7 +14,13 @@ namespace kdmesh {
 ///                  a value replaces the default's whole value, lists and mappings included)
 ///   jobs:          required, non-empty list of mappings:
 ///     name         required, unique, [A-Za-z0-9_.-]+
-///     input        required; .stl, .ply, .obj or .off; relative to the YAML file's directory; must exist
+///     input        required unless bodies is given; .stl, .ply, .obj or .off; relative to the YAML
+///                  file's directory; must exist
+///     bodies       instead of input: a non-empty list of {name, input}, several solids meshed
+///                  together, region k = body k (name: [A-Za-z0-9_-]+, distinct; it names the
+///                  region's volume group in the solver formats; input as above). Bodies must lie
+///                  apart (or one in another's void): touching or overlapping ones are refused,
+///                  naming both and a point
 ///     scale        optional number > 0 (default 1)
 ///     size         required number > 0: h_max
 ///     min_size     optional number > 0, <= size (default size / 1000)

@@ -36,7 +36,9 @@ std::vector<JobOutput> job_outputs(const MeshJob& job) {
 }
 
 std::vector<PathUse> job_path_uses(const MeshJob& job) {
-  std::vector<PathUse> uses{{job.input, false, "input"}};
+  std::vector<PathUse> uses;
+  if (job.bodies.empty()) uses.push_back({job.input, false, "input"});
+  for (const BodyInput& b : job.bodies) uses.push_back({b.input, false, "input of body '" + b.name + "'"});
   for (const JobOutput& o : job_outputs(job)) uses.push_back({o.path, true, o.label});
   return uses;
 }

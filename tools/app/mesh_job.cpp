@@ -295,17 +295,24 @@ MeshResult run_pipeline(const MeshJob& job, const MeshJobCallbacks& cb, nlohmann
   j["notices"] = nlohmann::json::array();
 
   SurfaceMesh raw;
+  std::vector<NamedSurface> bodies;
   if (in_memory) {
     raw = *in_memory;
-  } else {
+  } else if (job.bodies.empty()) {
     log("reading " + job.input);
     raw = read_surface(job.input);
+  } else {
+    for (const BodyInput& b : job.bodies) {
+      log("reading " + b.input + " (body " + b.name + ")");
+      bodies.push_back({b.name, b.input, read_surface(b.input)});
+    }
   }
   const double read_seconds = clock.seconds();
   MeshReport report;
   MeshResult result;
   try {
-    result = mesh_solid(std::move(raw), params, cb, &report);
+    result = bodies.empty() ? mesh_solid(std::move(raw), params, cb, &report)
+                            : mesh_solid(std::move(bodies), params, cb, &report);
   } catch (...) {
     report.seconds["read"] = read_seconds;
     add_report_json(report, nullptr, j);
@@ -414,6 +421,16 @@ void add_report_json(const MeshReport& r, const FeMesh* fe, nlohmann::json& j) {
   if (r.has_surface) {
     j["solid_volume"] = r.solid_volume;
     j["bbox"] = {{"min", r.bbox_min}, {"max", r.bbox_max}};
+  }
+  if (!r.bodies.empty()) {
+    nlohmann::json bodies = nlohmann::json::array();
+    for (std::size_t k = 0; k < r.bodies.size(); ++k) {
+      const MeshReport::Body& b = r.bodies[k];
+      bodies.push_back({{"name", b.name}, {"input", b.input}, {"region", k}, {"solid_volume", b.solid_volume}});
+      if (r.has_check)
+        bodies.back().update({{"mesh_volume", b.mesh_volume}, {"volume_error", b.volume_error}, {"tets", b.tets}});
+    }
+    j["bodies"] = bodies;
   }
   if (r.repairs)
     j["repairs"] = {{"removed_collapsed", r.repairs->removed_collapsed}, {"split_caps", r.repairs->split_caps},

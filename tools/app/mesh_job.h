@@ -18,8 +18,16 @@ namespace kdmesh {
 /// surface file's path usable as is, are among them) plus where it was defined, its batch time
 /// limit and its output files (what `kdmesh mesh` options and one entry of a batch file map
 /// to; see tools/app/job_config.h for the YAML schema).
+/// One named body of a job's `bodies` list: its name (its region's) and its surface file.
+struct BodyInput {
+  std::string name, input;
+};
+
 struct MeshJob : MeshParams {
   std::string origin;          ///< where it was defined, e.g. "jobs.yaml:12" (may be empty)
+  /// Several named solids meshed together, each read from its own file (mesh_solid on a list
+  /// of NamedSurface); empty: the one surface `input`. MeshParams::input then lists them.
+  std::vector<BodyInput> bodies;
   /// Wall-clock limit in seconds when run in a batch (tools/app/job_process.h); 0 = none.
   double timeout = 0;
   std::string vtu, summary, nodes;  ///< output paths (usable as is); empty = not written
@@ -47,6 +55,8 @@ struct MeshJobResult {
   ExitCode code = ExitCode::ok;  ///< ok, or the class of the error that failed the job
   /// The job's summary (also written to job.summary when it succeeds):
   ///   job, input, status ("ok" | "failed"),
+  ///   bodies [{name, input, region, solid_volume, mesh_volume, volume_error, tets}] (named
+  ///           bodies only; the last three once the mesh is checked),
   ///   counts {surface_points, surface_facets, shells, bodies, feature_edges, feature_corners,
   ///           placed_nodes, nodes, nodes_by_kind {corner, edge, surface, interior},
   ///           steiner_points, dropped_nodes, steiner_rounds, tets, boundary_faces},

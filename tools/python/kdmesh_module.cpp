@@ -83,6 +83,11 @@ py::dict error_data(std::exception_ptr error) {
     std::rethrow_exception(error);
   } catch (const CancelledError& e) {
     d["type"] = "cancelled";
+  } catch (const BodyContactError& e) {  // a SurfaceError with the two bodies and a point
+    d["type"] = "surface";
+    d["facets"] = e.facets();
+    d["bodies"] = std::vector<std::string>{e.names()[0], e.names()[1]};
+    d["where"] = std::vector<double>{e.where()[0], e.where()[1], e.where()[2]};
   } catch (const SurfaceError& e) {
     d["type"] = "surface";
     d["facets"] = e.facets();
@@ -116,7 +121,10 @@ py::tuple run(py::object surface, const std::string& options_json, py::object pr
   }
   SurfaceMesh in_memory;
   bool have_arrays = false;
-  if (py::isinstance<py::tuple>(surface) || py::isinstance<py::list>(surface)) {
+  if (!job.bodies.empty() || surface.is_none()) {  // bodies=[{name, input}, ...]: the files are read by the job
+    if (job.bodies.empty()) throw UsageError("surface is None: give a path, (vertices, triangles) or bodies=[...]");
+    if (!surface.is_none()) throw UsageError("give either a surface or bodies=[...], not both");
+  } else if (py::isinstance<py::tuple>(surface) || py::isinstance<py::list>(surface)) {
     py::sequence seq = surface;
     if (py::len(seq) != 2) throw UsageError("surface must be a path or a (vertices, triangles) pair");
     using Vertices = py::array_t<double, py::array::c_style | py::array::forcecast>;
@@ -130,7 +138,8 @@ py::tuple run(py::object surface, const std::string& options_json, py::object pr
     if (!std::filesystem::is_regular_file(job.input, ec))
       throw InputError(job.input, 0, "no such file");
   }
-  const bool has_fe = has_solver_outputs(job) || !job.groups.empty() || job.group_options.patch_groups || job.element_order == 2;
+  const bool has_fe = has_solver_outputs(job) || !job.groups.empty() || job.group_options.patch_groups ||
+                      job.element_order == 2 || !job.bodies.empty();  // named bodies: their volume groups
   // The job runner turns the boundary-groups stage on for solver outputs; the Python result
   // also carries them when groups (or quadratic elements) are asked for.
   job.fe_groups = has_fe;

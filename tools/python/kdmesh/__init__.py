@@ -75,11 +75,17 @@ class GeometryError(Error):
 
 
 class SurfaceError(GeometryError):
-    """A surface that bounds no solid (exit code 4): `facets`, the offending facet ids."""
+    """A surface that bounds no solid (exit code 4): `facets`, the offending facet ids; for
+    named bodies that touch or overlap also `bodies` (their two names) and `where` (a point
+    where they meet, or one inside both)."""
 
     @property
     def facets(self):
         return list(self.data.get("facets", []))
+
+    @property
+    def bodies(self):
+        return list(self.data.get("bodies", []))
 
 
 class CheckError(Error):
@@ -211,7 +217,9 @@ def _raise(err, summary):
 
 def mesh(surface, size, progress=None, cancel=None, **options):
     """Meshes the solid bounded by `surface`: a path (.stl, .ply, .obj, .off) or a pair
-    (vertices (n, 3), triangles (m, 3)). `size` and **options are a batch job's keys.
+    (vertices (n, 3), triangles (m, 3)); or, with surface=None and
+    bodies=[{"name": ..., "input": path}, ...], several named solids together (region k is
+    body k). `size` and **options are a batch job's keys.
     `progress(stage, fraction)` is called during long stages; `cancel()` returning True stops
     the job (CancelledError). Ctrl-C stops it too and raises KeyboardInterrupt. The GIL is
     released while meshing."""
@@ -222,7 +230,7 @@ def mesh(surface, size, progress=None, cancel=None, **options):
             raise UsageError("surface must be a path or a (vertices, triangles) pair")
         surface = (_np.ascontiguousarray(surface[0], dtype=_np.float64),
                    _np.ascontiguousarray(surface[1], dtype=_np.int64))
-    else:
+    elif surface is not None:
         surface = str(surface)
     text = _json.dumps(opts, default=_json_default)
     native, summary_text, err, interrupted = _kdmesh.run(surface, text, progress, cancel)

@@ -1,0 +1,215 @@
+// kdmesh — several named solids meshed together (mesh_solid on a list of NamedSurface, a job's
+// `bodies`; issue 21): each body is its region, in list order; bodies apart or in another's
+// void are meshed, touching, crossing or nested-in-material ones are refused naming both and
+// a point decided exactly; each body's own surface errors name its own file.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <gtest/gtest.h>
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "mesher/mesh_solid.h"
+#include "mesher/surface/surface_bodies.h"
+
+namespace kdmesh {
+namespace {
+
+using V3 = std::array<double, 3>;
+
+/// The box [lo, hi] as 8 points and 12 outward triangles.
+SurfaceMesh box_at(V3 lo, V3 hi) {
+  SurfaceMesh s;
+  for (int i = 0; i < 8; ++i)
+    s.points.push_back((i & 1) ? hi[0] : lo[0], (i >> 1 & 1) ? hi[1] : lo[1], (i >> 2 & 1) ? hi[2] : lo[2]);
+  for (std::uint32_t x : {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                          2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5})
+    s.tris.push_back(x);
+  return s;
+}
+
+/// Two shells in one surface (`inner` is then a void of `outer`'s solid).
+SurfaceMesh with_void(SurfaceMesh outer, const SurfaceMesh& inner) {
+  const std::uint32_t off = std::uint32_t(outer.points.size());
+  outer.points.xyz.insert(outer.points.xyz.end(), inner.points.xyz.begin(), inner.points.xyz.end());
+  for (std::uint32_t v : inner.tris) outer.tris.push_back(v + off);
+  return outer;
+}
+
+MeshParams params(double size) {
+  MeshParams p;
+  p.name = "assembly";
+  p.sizing.max_size = size;
+  p.sizing.min_size = size / 1000;
+  return p;
+}
+
+std::vector<NamedSurface> two(const std::string& a, SurfaceMesh sa, const std::string& b, SurfaceMesh sb) {
+  std::vector<NamedSurface> v;
+  v.push_back({a, a + ".stl", std::move(sa)});
+  v.push_back({b, b + ".stl", std::move(sb)});
+  return v;
+}
+
+V3 centroid(const VolumeMesh& m, std::size_t t) {
+  V3 c{0, 0, 0};
+  for (int i = 0; i < 4; ++i)
+    for (int k = 0; k < 3; ++k) c[k] += m.nodes.points.p(m.tets[4 * t + i])[k] / 4;
+  return c;
+}
+
+bool inside(const V3& p, const V3& lo, const V3& hi) {
+  for (int k = 0; k < 3; ++k)
+    if (p[k] < lo[k] || p[k] > hi[k]) return false;
+  return true;
+}
+
+/// The contact error of meshing `bodies`, which must be one.
+BodyContactError contact_error(std::vector<NamedSurface> bodies) {
+  try {
+    mesh_solid(std::move(bodies), params(0.3));
+  } catch (const BodyContactError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no BodyContactError";
+  return BodyContactError("none", {}, {0, 0}, {"", ""}, {0, 0, 0});
+}
+
+// "right" is listed first: the regions follow the list, not the geometry or the file order of
+// the solids; the report and the FE volume groups carry the names.
+TEST(MeshBodies, EachBodyIsItsRegionInListOrder) {
+  MeshParams p = params(0.25);
+  p.fe_groups = true;
+  const MeshResult r = mesh_solid(two("right", box_at({2, 0, 0}, {3, 1, 1}), "left", box_at({0, 0, 0}, {1, 1, 1})), p);
+  const VolumeMesh& m = r.mesh;
+  ASSERT_EQ(r.report.bodies.size(), 2u);
+  std::size_t in[2] = {0, 0}, wrong = 0;
+  for (std::size_t t = 0; t < m.num_tets(); ++t) {
+    const std::uint32_t want = centroid(m, t)[0] > 1.5 ? 0 : 1;
+    wrong += m.tet_region[t] != want;
+    ++in[m.tet_region[t] < 2 ? m.tet_region[t] : 0];
+  }
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_GT(in[0], 0u);
+  EXPECT_GT(in[1], 0u);
+  for (std::uint32_t k = 0; k < 2; ++k) {
+    const MeshReport::Body& b = r.report.bodies[k];
+    EXPECT_EQ(b.name, k == 0 ? "right" : "left");
+    EXPECT_EQ(b.input, b.name + ".stl");
+    EXPECT_EQ(b.tets, in[k]);
+    EXPECT_NEAR(b.solid_volume, 1.0, 1e-12);
+    EXPECT_NEAR(b.mesh_volume, 1.0, 1e-9);  // a box's boundary is recovered exactly
+    EXPECT_LE(b.volume_error, 1e-9);
+  }
+  EXPECT_EQ(r.report.counts.bodies, 2u);
+  int volume_groups = 0;
+  for (const FeGroup& g : r.fe.groups) {
+    if (g.dim != 3) continue;
+    ++volume_groups;
+    ASSERT_EQ(g.entities.size(), 1u) << g.name;
+    EXPECT_EQ(g.name, g.entities[0] == 0 ? "right" : "left");
+  }
+  EXPECT_EQ(volume_groups, 2);
+}
+
+// The two boxes share the face x = 1 (separate points and triangles, as separately exported
+// parts are): refused, naming both, at a point of that face.
+TEST(MeshBodies, TouchingBodiesAreRefusedNamingBothAndAPointOnTheSharedFace) {
+  const BodyContactError e = contact_error(two("a", box_at({0, 0, 0}, {1, 1, 1}), "b", box_at({1, 0, 0}, {2, 1, 1})));
+  EXPECT_EQ(e.code(), ExitCode::geometry);
+  EXPECT_EQ(e.names()[0], "a");
+  EXPECT_EQ(e.names()[1], "b");
+  EXPECT_EQ(e.bodies()[0], 0u);
+  EXPECT_EQ(e.bodies()[1], 1u);
+  EXPECT_EQ(e.where()[0], 1.0);
+  EXPECT_TRUE(inside(e.where(), {1, 0, 0}, {1, 1, 1}));
+  const std::string what = e.what();
+  EXPECT_NE(what.find("bodies 'a' and 'b' touch or overlap"), std::string::npos) << what;
+  EXPECT_NE(what.find("of a.stl"), std::string::npos) << what;
+  EXPECT_NE(what.find("of b.stl"), std::string::npos) << what;
+  ASSERT_EQ(e.facets().size(), 2u);
+}
+
+// Touching along one edge only (x = 1, y = 1) is contact too: closed facets.
+TEST(MeshBodies, BodiesTouchingAlongAnEdgeAreRefused) {
+  const BodyContactError e = contact_error(two("a", box_at({0, 0, 0}, {1, 1, 1}), "b", box_at({1, 1, 0}, {2, 2, 1})));
+  EXPECT_EQ(e.where()[0], 1.0);
+  EXPECT_EQ(e.where()[1], 1.0);
+  EXPECT_TRUE(inside(e.where(), {1, 1, 0}, {1, 1, 1}));
+}
+
+// A bar pushed halfway into a box: the point lies on both surfaces.
+TEST(MeshBodies, CrossingBodiesAreRefusedAtAPointOnBothSurfaces) {
+  const V3 blo{0.5, 0.25, 0.25}, bhi{1.5, 0.75, 0.75};
+  const BodyContactError e = contact_error(two("box", box_at({0, 0, 0}, {1, 1, 1}), "bar", box_at(blo, bhi)));
+  const V3 w = e.where();
+  EXPECT_TRUE(inside(w, {0, 0, 0}, {1, 1, 1}));
+  EXPECT_TRUE(inside(w, blo, bhi));
+  auto on_face = [&](V3 lo, V3 hi) {
+    for (int k = 0; k < 3; ++k)
+      if (w[k] == lo[k] || w[k] == hi[k]) return true;
+    return false;
+  };
+  EXPECT_TRUE(on_face({0, 0, 0}, {1, 1, 1}));
+  EXPECT_TRUE(on_face(blo, bhi));
+}
+
+// A body wholly inside another's material: its surface would be read as a void of the other;
+// refused, at a corner of the inner body.
+TEST(MeshBodies, BodyInsideAnothersMaterialIsRefused) {
+  const BodyContactError e = contact_error(two("outer", box_at({0, 0, 0}, {3, 3, 3}), "inner", box_at({1, 1, 1}, {2, 2, 2})));
+  EXPECT_EQ(e.names()[0], "outer");
+  EXPECT_EQ(e.names()[1], "inner");
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(e.where()[k] == 1.0 || e.where()[k] == 2.0) << k;
+  EXPECT_NE(std::string(e.what()).find("'inner' lies inside the material of 'outer'"), std::string::npos) << e.what();
+}
+
+// A core in the void of a hollow body is apart from it: both are meshed, each its region, the
+// hollow one without the void.
+TEST(MeshBodies, BodyInAnothersVoidIsKept) {
+  const SurfaceMesh hollow = with_void(box_at({0, 0, 0}, {3, 3, 3}), box_at({0.5, 0.5, 0.5}, {2.5, 2.5, 2.5}));
+  const MeshResult r = mesh_solid(two("hollow", hollow, "core", box_at({1, 1, 1}, {2, 2, 2})), params(0.4));
+  ASSERT_EQ(r.report.bodies.size(), 2u);
+  EXPECT_NEAR(r.report.bodies[0].solid_volume, 27.0 - 8.0, 1e-9);
+  EXPECT_NEAR(r.report.bodies[1].solid_volume, 1.0, 1e-12);
+  EXPECT_NEAR(r.report.bodies[0].mesh_volume, 19.0, 1e-8);
+  EXPECT_NEAR(r.report.bodies[1].mesh_volume, 1.0, 1e-9);
+  std::size_t wrong = 0, in_void = 0;
+  for (std::size_t t = 0; t < r.mesh.num_tets(); ++t) {
+    const V3 c = centroid(r.mesh, t);
+    wrong += r.mesh.tet_region[t] != (inside(c, {1, 1, 1}, {2, 2, 2}) ? 1u : 0u);
+    in_void += inside(c, {0.5, 0.5, 0.5}, {2.5, 2.5, 2.5}) && !inside(c, {1, 1, 1}, {2, 2, 2});
+  }
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_EQ(in_void, 0u);
+}
+
+// One body's own defect is reported as for a single surface: its file and its own facet ids.
+TEST(MeshBodies, ABodysSurfaceErrorNamesItsOwnInput) {
+  SurfaceMesh open = box_at({2, 0, 0}, {3, 1, 1});
+  open.tris.resize(open.tris.size() - 3);  // facet 11 gone: an open surface
+  try {
+    mesh_solid(two("whole", box_at({0, 0, 0}, {1, 1, 1}), "open", open), params(0.3));
+    FAIL() << "no SurfaceError";
+  } catch (const BodyContactError& e) {
+    FAIL() << "a contact error for a defect of one body: " << e.what();
+  } catch (const SurfaceError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("open.stl"), std::string::npos) << what;
+    EXPECT_EQ(what.find("whole.stl"), std::string::npos) << what;
+    for (std::uint32_t f : e.facets()) EXPECT_LT(f, 11u);  // the body's own ids
+  }
+}
+
+TEST(MeshBodies, BadBodyListsAreUsageErrors) {
+  EXPECT_THROW(mesh_solid(std::vector<NamedSurface>{}, params(0.3)), UsageError);
+  EXPECT_THROW(mesh_solid(two("", box_at({0, 0, 0}, {1, 1, 1}), "b", box_at({2, 0, 0}, {3, 1, 1})), params(0.3)),
+               UsageError);
+  EXPECT_THROW(mesh_solid(two("a b", box_at({0, 0, 0}, {1, 1, 1}), "b", box_at({2, 0, 0}, {3, 1, 1})), params(0.3)),
+               UsageError);
+  EXPECT_THROW(mesh_solid(two("a", box_at({0, 0, 0}, {1, 1, 1}), "a", box_at({2, 0, 0}, {3, 1, 1})), params(0.3)),
+               UsageError);
+}
+
+}  // namespace
+}  // namespace kdmesh
