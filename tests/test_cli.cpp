@@ -104,6 +104,16 @@ TEST(Cli, CgalKernelAndOrders) {
   const CliResult bad = kdmesh("delaunay " + pts.string() + " --order cgal -q");
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.err.find("--kernel cgal"), std::string::npos) << bad.err;
+  // Stock CGAL (issue 22's baseline): no vertex info, a Point_3 range; the same tets, checked.
+  const CliResult stock = kdmesh("delaunay " + pts.string() + " --kernel cgal-plain --order cgal --check --json -q");
+  ASSERT_EQ(stock.code, 0) << stock.err;
+  const auto js = nlohmann::json::parse(stock.out);
+  EXPECT_TRUE(js["check"]["kdmesh"]["identical"].get<bool>());
+  EXPECT_EQ(js["kernel"], "cgal-plain");
+  EXPECT_GT(js["seconds"]["delaunay"].get<double>(), 0.0);
+  const CliResult plain_order = kdmesh("delaunay " + pts.string() + " --kernel cgal-plain --order kd-bfs -q");
+  EXPECT_EQ(plain_order.code, 2);
+  EXPECT_NE(plain_order.err.find("needs --order cgal"), std::string::npos) << plain_order.err;
 }
 
 // --threads 2 on 50k points: rounds ran (reported in the JSON and the human summary), the

@@ -74,7 +74,8 @@ TEST(CliBench, SmokeRunAllKernels) {
   EXPECT_EQ(j["command"], "bench");
 
   // Per distribution: kdmesh x {kd-bfs, kd-bfs-hilbert, hilbert}, cgal x {the same, range},
-  // tetgen; plus Table 15's order-only runs (kd-bfs, hilbert, kd-bfs-hilbert) on the cube.
+  // stock cgal (range), tetgen; plus Table 15's order-only runs (kd-bfs, hilbert,
+  // kd-bfs-hilbert) on the cube.
   std::vector<std::string> header;
   const auto rows = read_csv(out / "results.csv", header);
   const std::vector<std::string> expected_header = {
@@ -82,8 +83,8 @@ TEST(CliBench, SmokeRunAllKernels) {
       "orient_per_point", "conflicts_per_point", "sphere_tests_per_point", "orient_all_per_point",
       "peak_rss_bytes", "bytes_per_point", "tets", "wall_seconds", "count_wall_seconds", "note"};
   EXPECT_EQ(header, expected_header);
-  ASSERT_EQ(rows.size(), 19u);
-  EXPECT_EQ(j["runs"], 19);
+  ASSERT_EQ(rows.size(), 21u);
+  EXPECT_EQ(j["runs"], 21);
   std::map<std::string, int> runs_per_kernel;
   std::map<std::string, std::string> tets_of_dist;
   for (const auto& row : rows) {
@@ -108,8 +109,8 @@ TEST(CliBench, SmokeRunAllKernels) {
       EXPECT_EQ(row.at("tets"), tets_of_dist[row.at("dist")]);
     }
     tets_of_dist[row.at("dist")] = row.at("tets");
-    if (kernel == "tetgen") {
-      EXPECT_TRUE(row.at("orient_per_point").empty());  // TetGen is not instrumented
+    if (kernel == "tetgen" || kernel == "cgal-plain") {
+      EXPECT_TRUE(row.at("orient_per_point").empty());  // TetGen and stock CGAL are not instrumented
       continue;
     }
     EXPECT_GT(positive(row, "orient_per_point"), 1.0);
@@ -124,12 +125,13 @@ TEST(CliBench, SmokeRunAllKernels) {
   }
   EXPECT_EQ(runs_per_kernel["kdmesh"], 6);
   EXPECT_EQ(runs_per_kernel["cgal"], 8);
+  EXPECT_EQ(runs_per_kernel["cgal-plain"], 2);
   EXPECT_EQ(runs_per_kernel["tetgen"], 2);
   EXPECT_EQ(runs_per_kernel["order-only"], 3);
 
   const std::string md = slurp(out / "tables.md");
   for (const char* heading : {"### Table 1 Cube", "### Table 7 Axes", "### Table 8 Cube", "### Table 14 Axes",
-                              "## Table 15", "cgal range", "tetgen"})
+                              "## Table 15", "cgal range", "stock cgal range", "tetgen"})
     EXPECT_NE(md.find(heading), std::string::npos) << heading;
   EXPECT_EQ(md.find("Table 2 "), std::string::npos);  // planes did not run
   // Plots when gnuplot is installed (a warning, not an error, without it).
@@ -140,7 +142,7 @@ TEST(CliBench, SmokeRunAllKernels) {
     EXPECT_NE(r.err.find("gnuplot"), std::string::npos);
   }
   // One progress line per run on stderr.
-  EXPECT_NE(r.err.find("[ 19/19]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("[ 21/21]"), std::string::npos) << r.err;
 }
 
 TEST(CliBench, TimeoutKillsTheRun) {

@@ -268,15 +268,19 @@ TEST_P(GeneralPosition, TetgenAndCgalAgree) {
   const ReferenceResult one = cgal_delaunay(ps, &ident);
   const Ordering shuffled = random_order(n, 42);
   const ReferenceResult rnd = cgal_delaunay(ps, &shuffled);
+  CgalOptions stock;
+  stock.plain = true;
+  const ReferenceResult plain = cgal_delaunay(ps, nullptr, stock);
 
   ASSERT_FALSE(tg.tets.empty());
   expect_same_set(ps, tg.tets, range.tets, "tetgen vs cgal range");
   expect_same_set(ps, tg.tets, one.tets, "tetgen vs cgal identity order");
   expect_same_set(ps, tg.tets, rnd.tets, "tetgen vs cgal random order");
+  expect_same_set(ps, tg.tets, plain.tets, "tetgen vs stock cgal (no vertex info)");
 
   const double hull = convex_hull_volume(ps);
   ASSERT_GT(hull, 0.0);
-  for (const ReferenceResult* r : {&tg, &range, &one, &rnd}) {
+  for (const ReferenceResult* r : {&tg, &range, &one, &rnd, &plain}) {
     EXPECT_EQ(r->num_vertices, n);
     EXPECT_EQ(count_non_positive(ps, r->tets), 0u);
     EXPECT_LT(rel_diff(total_volume(ps, r->tets), hull), 1e-12);
@@ -357,7 +361,10 @@ TEST(Reference, ExactDuplicatesAreMerged) {
   const ReferenceResult one = cgal_delaunay(dup, &ident);
   const Ordering shuffled = random_order(dup.size(), 5);
   const ReferenceResult rnd = cgal_delaunay(dup, &shuffled);
-  for (const ReferenceResult* r : {&tg, &range, &one, &rnd}) {
+  CgalOptions stock;
+  stock.plain = true;
+  const ReferenceResult plain = cgal_delaunay(dup, nullptr, stock);  // ids found by point lookup
+  for (const ReferenceResult* r : {&tg, &range, &one, &rnd, &plain}) {
     EXPECT_EQ(r->num_vertices, m);
     expect_same_set(dup, r->tets, expected, "with duplicates vs without");
     EXPECT_EQ(count_non_positive(dup, r->tets), 0u);

@@ -1,6 +1,8 @@
 // kdmesh — CGAL 5.5 as a reference: Delaunay_triangulation_3 and convex_hull_3 (Epick).
 // SPDX-License-Identifier: AGPL-3.0-or-later
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <cstdint>
 #include <string>
 #include <type_traits>
@@ -12,6 +14,7 @@
 #include <CGAL/Spatial_sort_traits_adapter_3.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/Triangulation_vertex_base_with_info_3.h>
+#include <CGAL/Unique_hash_map.h>
 #include <CGAL/convex_hull_3.h>
 #include <CGAL/property_map.h>
 #include <CGAL/spatial_sort.h>
@@ -225,6 +228,42 @@ ReferenceResult cgal_run(const PointSet& points, const Ordering* order) {
   return result;
 }
 
+/// Stock CGAL (CgalOptions::plain): Delaunay_triangulation_3<Epick> on a Point_3 range, timed
+/// alone; ids recovered afterwards through the points sorted by coordinates.
+ReferenceResult cgal_plain_run(const PointSet& points) {
+  using PlainDt = CGAL::Delaunay_triangulation_3<K>;
+  const std::size_t n = points.size();
+  std::vector<Point> pts;
+  pts.reserve(n);
+  for (std::uint32_t i = 0; i < n; ++i) pts.push_back(cgal_point(points, i));
+  ReferenceResult result;
+  PlainDt dt;
+  Stopwatch clock;
+  dt.insert(pts.begin(), pts.end());
+  result.seconds = clock.seconds();
+  if (dt.dimension() < 3)
+    throw GeometryError("CGAL: all points are coplanar (triangulation of dimension " +
+                        std::to_string(dt.dimension()) + "): no tetrahedralization");
+  // A vertex's id: the canonical id of its point (identical points share one vertex).
+  const std::vector<std::uint32_t> canon = canonical_point_ids(points);
+  std::vector<std::uint32_t> by_xyz(n);
+  std::iota(by_xyz.begin(), by_xyz.end(), 0u);
+  auto less = [&](std::uint32_t a, std::uint32_t b) { return pts[a] < pts[b]; };  // lexicographic
+  std::sort(by_xyz.begin(), by_xyz.end(), less);
+  CGAL::Unique_hash_map<PlainDt::Vertex_handle, std::uint32_t> id(0, dt.number_of_vertices());
+  for (const PlainDt::Vertex_handle v : dt.finite_vertex_handles()) {
+    const auto it = std::lower_bound(by_xyz.begin(), by_xyz.end(), v->point(),
+                                     [&](std::uint32_t a, const Point& p) { return pts[a] < p; });
+    if (it == by_xyz.end() || pts[*it] != v->point()) throw Error("CGAL: a vertex that is no input point");
+    id[v] = canon[*it];
+  }
+  result.tets.reserve(4 * dt.number_of_finite_cells());
+  for (const PlainDt::Cell_handle c : dt.finite_cell_handles())
+    for (int j = 0; j < 4; ++j) result.tets.push_back(id[c->vertex(j)]);
+  result.num_vertices = dt.number_of_vertices();
+  return result;
+}
+
 }  // namespace
 
 ReferenceResult cgal_delaunay(const PointSet& points, const Ordering* order,
@@ -232,6 +271,11 @@ ReferenceResult cgal_delaunay(const PointSet& points, const Ordering* order,
   if (points.size() == 0) throw GeometryError("CGAL: no points");
   check_finite(points);
   if (order) check_order(*order, points.size());
+  if (options.plain) {
+    if (order || options.count)
+      throw UsageError("stock CGAL inserts the range in its own order and counts nothing");
+    return cgal_plain_run(points);
+  }
   return options.count ? cgal_run<CountingDt>(points, order) : cgal_run<Dt>(points, order);
 }
 

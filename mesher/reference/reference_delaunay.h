@@ -31,6 +31,11 @@ struct CgalOptions {
   /// the triangulation, on counting traits, that walks with exact predicates only (see
   /// cgal_delaunay), so its `seconds` are not CGAL's normal speed: time without counting.
   bool count = false;
+  /// Stock CGAL, the honest baseline (issue 22): a plain Delaunay_triangulation_3<Epick>, whose
+  /// vertices carry no info, inserting a std::vector<Point_3> range (CGAL's own spatial sort).
+  /// `seconds` is that insert(first, last) call alone; the point ids of the tets are found
+  /// afterwards by looking each vertex's point up. Needs order == nullptr and count off.
+  bool plain = false;
 };
 
 /// All results use canonical ids (canonical_point_ids: the smallest id of each group of

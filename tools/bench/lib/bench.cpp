@@ -31,8 +31,9 @@ namespace kdmesh {
 
 namespace {
 
-const std::vector<std::string> kAllKernels = {"kdmesh", "cgal", "tetgen"};
-/// Default orders, in table order; "cgal" is CGAL's insert(range) (cgal kernel only).
+const std::vector<std::string> kAllKernels = {"kdmesh", "cgal", "cgal-plain", "tetgen"};
+/// Default orders, in table order; "cgal" is CGAL's insert(range) (cgal kernels only;
+/// cgal-plain, stock CGAL without vertex info, takes no other).
 const std::vector<std::string> kAllOrders = {"kd-bfs", "kd-bfs-hilbert", "kd-bfs-alt", "hilbert",
                                              "brio",   "random",         "cgal"};
 
@@ -78,6 +79,7 @@ struct Planned {
 
 std::vector<std::string> orders_for(const std::string& kernel, const std::vector<std::string>& orders) {
   if (kernel == "tetgen") return {"tetgen"};
+  if (kernel == "cgal-plain") return {"cgal"};
   std::vector<std::string> v;
   for (const std::string& o : orders) {
     if (o == "tetgen") continue;
@@ -99,7 +101,7 @@ std::vector<Planned> make_plan(const BenchOptions& o, std::vector<std::string>& 
   }
   for (const std::string& k : kernels)
     if (!contains(kAllKernels, k))
-      throw UsageError("bench: unknown kernel '" + k + "' (valid: kdmesh, cgal, tetgen)");
+      throw UsageError("bench: unknown kernel '" + k + "' (valid: kdmesh, cgal, cgal-plain, tetgen)");
   const std::vector<std::string> orders = o.orders.empty() ? kAllOrders : o.orders;
   for (const std::string& ord : orders) {
     if (ord != "cgal" && ord != "tetgen") parse_order_kind(ord);  // throws UsageError
@@ -224,10 +226,11 @@ std::vector<std::size_t> bench_default_sizes(const std::string& dist) {
 RunMeasurement measure_run(const RunSpec& s) {
   const Distribution d = parse_distribution(s.dist);
   const bool own_order = s.order == "cgal" || s.order == "tetgen";
-  if (s.kernel == "tetgen" ? s.order != "tetgen"
-                           : (s.order == "tetgen" || (s.order == "cgal" && s.kernel != "cgal")))
+  if (s.kernel == "tetgen"       ? s.order != "tetgen"
+      : s.kernel == "cgal-plain" ? s.order != "cgal"
+                                 : (s.order == "tetgen" || (s.order == "cgal" && s.kernel != "cgal")))
     throw UsageError("bench-run: order '" + s.order + "' does not go with kernel '" + s.kernel + "'");
-  if (!contains({"kdmesh", "cgal", "tetgen", "order-only"}, s.kernel))
+  if (!contains({"kdmesh", "cgal", "cgal-plain", "tetgen", "order-only"}, s.kernel))
     throw UsageError("bench-run: unknown kernel '" + s.kernel + "'");
   if (s.count && s.kernel != "cgal") throw UsageError("bench-run: --count is for --kernel cgal");
   OrderOptions oo;
@@ -246,9 +249,10 @@ RunMeasurement measure_run(const RunSpec& s) {
     const ReferenceResult r = tetgen_delaunay(pts);
     m.delaunay_seconds = r.seconds;
     m.tets = r.tets.size() / 4;
-  } else if (s.kernel == "cgal") {
+  } else if (s.kernel == "cgal" || s.kernel == "cgal-plain") {
     CgalOptions co;
     co.count = s.count;
+    co.plain = s.kernel == "cgal-plain";
     const ReferenceResult r = cgal_delaunay(pts, own_order ? nullptr : &ord, co);
     m.delaunay_seconds = r.seconds;
     m.tets = r.tets.size() / 4;

@@ -26,7 +26,7 @@ namespace kdmesh {
 namespace {
 
 /// Fixed column order of the runs: kernels, then the orders of the issue.
-const std::vector<std::string> kKernelOrder = {"kdmesh", "cgal", "tetgen"};
+const std::vector<std::string> kKernelOrder = {"kdmesh", "cgal", "cgal-plain", "tetgen"};
 const std::vector<std::string> kOrderOrder = {"kd-bfs", "kd-bfs-hilbert", "kd-bfs-alt", "hilbert",
                                               "brio",   "random",         "input",      "cgal",
                                               "tetgen"};
@@ -47,6 +47,7 @@ struct Series {
   std::string label() const {
     if (kernel == "tetgen") return "tetgen";
     if (kernel == "cgal" && order == "cgal") return "cgal range";
+    if (kernel == "cgal-plain") return "stock cgal range";
     return kernel + " " + order;
   }
 };
@@ -150,7 +151,11 @@ const char* kDefinitions = R"(## Definitions
   - `cgal <order>`: CGAL 5.5 `Delaunay_triangulation_3` on Epick, `insert(p, start)` one point
     at a time, `start` a cell of the hint's vertex (as the paper's Kd-tree and BRIO columns).
   - `cgal range`: CGAL's own `insert(first, last)` (its spatial sort, Hilbert mixed with
-    BRIO, is inside its time; as the paper's "Hilbert" column).
+    BRIO, is inside its time; as the paper's "Hilbert" column), on pairs (point, id) into
+    vertices that carry the id.
+  - `stock cgal range`: the honest baseline, stock CGAL: a plain
+    `Delaunay_triangulation_3<Epick>` (no vertex info) inserting a `std::vector<Point_3>`
+    range; not instrumented.
   - `tetgen`: TetGen 1.5 `tetrahedralize("zQJF")` (its own BRIO + Hilbert sort inside its time).
 - **Time** (Tables 1-7) = order building + Delaunay insertion, wall-clock seconds, as the
   paper's (which include order building). The Delaunay part is the insertion loop only
@@ -294,7 +299,7 @@ void write_bench_tables(const std::vector<BenchRecord>& records, const BenchRepo
     for (std::size_t n : sizes[d]) head.push_back(size_str(n));
     md << md_row(head) << md_rule(head.size(), 2);
     for (const Series& s : series[d]) {
-      if (s.kernel == "tetgen") continue;  // TetGen is not instrumented
+      if (s.kernel == "tetgen" || s.kernel == "cgal-plain") continue;  // not instrumented
       for (int what = 0; what < 2; ++what) {
         std::vector<std::string> row = {what == 0 ? s.label() : "", what == 0 ? "Orientation" : "Conflicts"};
         for (std::size_t n : sizes[d]) {
