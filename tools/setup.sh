@@ -36,11 +36,13 @@ PACKAGES=(
   libgmp-dev
   libgtest-dev
   libhdf5-dev
+  libopenmpi-dev
   libtbb-dev
   libtet1.5-dev
   libvtk9-dev
   libyaml-cpp-dev
   nlohmann-json3-dev
+  openmpi-bin
   pybind11-dev
   python3-dev
   python3-dolfinx

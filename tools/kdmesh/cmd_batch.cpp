@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -17,9 +18,11 @@
 #include "core/timer.h"
 #include "core/memory_amount.h"
 #include "tools/kdmesh/cli.h"
+#include "tools/app/batch_schedule.h"
 #include "tools/app/job_config.h"
 #include "tools/app/job_process.h"
 #include "tools/app/mesh_job.h"
+#include "tools/kdmesh/batch_mpi.h"
 
 namespace kdmesh::cli {
 
@@ -33,6 +36,7 @@ struct Options {
   std::string max_memory;  ///< for jobs that set none
   double timeout = 0;      ///< for jobs that set none (seconds; 0 = none)
   bool allow_outside = false;
+  std::string shard;       ///< "i/N": run only that share of the jobs
   Output out;
 };
 
@@ -94,15 +98,31 @@ int run_batch(const Options& o) {
   lo.allow_outside_out_dir = o.allow_outside;
   const double limit = o.max_memory.empty() ? 0 : parse_memory_amount(o.max_memory, "--max-memory");
   lo.max_memory = limit;
+  const std::optional<Shard> shard = o.shard.empty() ? std::nullopt : std::optional(parse_shard(o.shard, "--shard"));
+  const MpiWorld world = mpi_world_from_environment();
+  if (world.size > 1 && !mpi_available())
+    throw UsageError("started by mpirun with " + std::to_string(world.size) +
+                     " ranks, but this kdmesh was built without MPI (libopenmpi-dev was missing): every "
+                     "rank would run every job; run it without mpirun, or split the batch with --shard i/N");
   const BatchConfig config = load_batch_config(o.file, lo);  // InputError: exit 3
   std::vector<MeshJob> jobs = select_jobs(config, o.only);
   for (MeshJob& j : jobs) {
     if (j.max_memory == 0) j.max_memory = limit;
     if (j.timeout == 0) j.timeout = o.timeout;
   }
-  const unsigned workers = std::max(1u, std::min<unsigned>(o.jobs, unsigned(jobs.size())));
-  out.stage(std::to_string(jobs.size()) + " job" + (jobs.size() == 1 ? "" : "s") + " from " +
-            o.file + ", " + std::to_string(workers) + " at a time");
+  const std::size_t listed = jobs.size();
+  if (shard) {  // a deterministic share, balanced by estimated size: the same on every task
+    std::vector<MeshJob> mine;
+    for (const std::size_t i : shard_jobs(estimate_job_costs(jobs), *shard)) mine.push_back(std::move(jobs[i]));
+    jobs = std::move(mine);
+  }
+  const bool mpi = world.size > 1;
+  const unsigned workers = mpi ? unsigned(world.size - 1) : std::max(1u, std::min<unsigned>(o.jobs, unsigned(jobs.size())));
+  if (world.rank == 0)
+    out.stage(std::to_string(jobs.size()) + " job" + (jobs.size() == 1 ? "" : "s") + " from " + o.file +
+              (shard ? " (shard " + o.shard + " of its " + std::to_string(listed) + ")" : std::string()) + ", " +
+              (mpi ? std::to_string(workers) + " MPI worker ranks, largest first"
+                   : std::to_string(workers) + " at a time"));
 
   std::mutex log_mutex;
   const bool tty = !out.quiet && isatty(STDERR_FILENO);
@@ -139,7 +159,16 @@ int run_batch(const Options& o) {
     else
       log(jobs[i].name, "FAILED: " + r.summary["error"].value("message", std::string()));
   };
-  const std::vector<MeshJobResult> results = run_jobs_in_processes(jobs, workers, callbacks, done);
+  std::vector<MeshJobResult> results;
+  if (mpi) {
+    bool root = false;
+    const std::vector<std::size_t> order =
+        world.rank == 0 ? largest_first(estimate_job_costs(jobs)) : std::vector<std::size_t>{};
+    results = run_jobs_over_mpi(jobs, order, callbacks, done, &root);
+    if (!root) return 0;  // rank 0 reports the batch and its exit code
+  } else {
+    results = run_jobs_in_processes(jobs, workers, callbacks, done);
+  }
 
   // Exit code: 0 if all succeeded; the failed jobs' code if they all share one; else 1.
   std::size_t failed = 0;
@@ -189,6 +218,10 @@ void add_batch_command(CLI::App& app, Runner& run) {
   cmd->add_option("--timeout", o->timeout,
                   "Stop a job that sets no timeout after this many seconds; it fails with exit 7 (0: none)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--shard", o->shard,
+                  "Run only share i of N of the jobs (0 <= i < N), e.g. one Slurm array task: "
+                  "--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT. The shares are balanced by "
+                  "estimated size, the same on every task, and together hold each job once");
   cmd->add_option("--only", o->only, "Run only the named jobs (repeatable)")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
@@ -200,7 +233,8 @@ void add_batch_command(CLI::App& app, Runner& run) {
   cmd->footer(
       "Config errors (exit 3) name the file, line and key, and stop the batch before any job\n"
       "runs. Each job runs in its own process: a job that fails, or crashes, is reported and\n"
-      "the others continue. Exit code: 0 if every job\n"
+      "the others continue. Under `mpirun -np N` (N >= 2) rank 0 hands the jobs, largest\n"
+      "first, to the N - 1 other ranks as each becomes free, and reports. Exit code: 0 if every job\n"
       "succeeded; otherwise the failed jobs' code when they all share one, else 1.\n"
       "Schema: tools/app/job_config.h.");
   cmd->callback([o, &run] { run = [o] { return run_batch(*o); }; });
