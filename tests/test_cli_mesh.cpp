@@ -150,6 +150,40 @@ TEST(CliMesh, SolverFormatsCarryTheBoundaryGroups) {
   }
 }
 
+// --body NAME=PATH (issue 21): two cubes apart are two regions, named in the summary and as the
+// INP's volume ELSETs; two touching cubes are refused (exit 4) naming both; a surface and
+// --body together, or neither, are usage errors.
+TEST(CliMesh, BodiesAreNamedRegionsAndTouchingOnesAreRefused) {
+  auto shifted = [](double dx, const std::string& name) {
+    kdmesh::SurfaceMesh m = cube(10);
+    for (std::size_t i = 0; i < m.points.size(); ++i) m.points.xyz[3 * i] += dx;
+    const fs::path p = tmpdir() / name;
+    kdmesh::write_stl(m, p.string());
+    return p.string();
+  };
+  const std::string left = shifted(0, "left.stl"), right = shifted(20, "right.stl"), next = shifted(10, "next.stl");
+  const fs::path inp = tmpdir() / "bodies.inp";
+  const CliResult r = kdmesh("mesh --body left=" + left + " --body right=" + right + " --size 4 --json -q --inp " +
+                             inp.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["counts"]["bodies"], 2);
+  ASSERT_EQ(j["bodies"].size(), 2u);
+  EXPECT_EQ(j["bodies"][0]["name"], "left");
+  EXPECT_EQ(j["bodies"][1]["name"], "right");
+  EXPECT_NEAR(j["bodies"][1]["mesh_volume"].get<double>(), 1000.0, 1e-6);
+  const std::string deck = slurp(inp);
+  EXPECT_NE(deck.find("*ELSET, ELSET=left"), std::string::npos);
+  EXPECT_NE(deck.find("*ELSET, ELSET=right"), std::string::npos);
+
+  const CliResult touch = kdmesh("mesh --body left=" + left + " --body next=" + next + " --size 4 -q");
+  EXPECT_EQ(touch.code, 4);
+  EXPECT_NE(touch.err.find("bodies 'left' and 'next' touch or overlap at (10,"), std::string::npos) << touch.err;
+  EXPECT_EQ(kdmesh("mesh " + left + " --body right=" + right + " --size 4 -q").code, 2);
+  EXPECT_EQ(kdmesh("mesh --size 4 -q").code, 2);
+  EXPECT_EQ(kdmesh("mesh --body nopath --size 4 -q").code, 2);
+}
+
 TEST(CliMesh, DelaunayChecksOfTheNodes) {
   KDMESH_REQUIRE_TETGEN();
   const fs::path stl = write_cube("cube4.stl", 4);

@@ -99,6 +99,7 @@ void add_compare_tetgen_command(CLI::App& app, Runner& run) {
       "time tables side by side");
   MeshCliSpec spec;
   spec.input_required = false;
+  spec.bodies = false;  // TetGen meshes one surface
   spec.outputs = false;
   add_mesh_job_options(cmd, o->mesh, spec);
   std::vector<CLI::Option*> job_options = cmd->get_options();  // input, --size, ... (and --help)

@@ -20,6 +20,8 @@ struct Options {
 
 int run_mesh(const Options& o) {
   const Output& out = o.out;
+  if (o.mesh.input.empty() && o.mesh.bodies.empty())
+    throw UsageError("input: give a surface file (.stl, .ply, .obj or .off), or --body NAME=PATH for each body");
   const MeshJob job = make_mesh_job(o.mesh);
   const MeshJobCallbacks cb = job_callbacks(out);
   const MeshJobResult r = run_mesh_job(job, cb);

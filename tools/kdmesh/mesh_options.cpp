@@ -34,6 +34,18 @@ MeshJob make_mesh_job(const MeshCliOptions& o) {
   MeshJob job;
   job.name = std::filesystem::path(o.input).stem().string();
   job.input = o.input;
+  for (const std::string& b : o.bodies) {  // NAME=PATH; the names are checked by mesh_solid
+    const std::size_t eq = b.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == b.size())
+      throw UsageError("--body '" + b + "': expected NAME=PATH, e.g. --body housing=housing.stl");
+    job.bodies.push_back({b.substr(0, eq), b.substr(eq + 1)});
+  }
+  if (!job.bodies.empty()) {
+    if (!o.input.empty()) throw UsageError("give either a surface file or --body NAME=PATH options, not both");
+    job.name = "bodies";
+    job.input.clear();
+    for (const BodyInput& b : job.bodies) job.input += (job.input.empty() ? "" : " + ") + b.input;
+  }
   job.scale = o.scale;
   job.sharp_angle = o.sharp_angle;
   job.sizing.max_size = o.size;
@@ -88,9 +100,15 @@ void add_mesh_job_options(CLI::App* cmd, MeshCliOptions& o, const MeshCliSpec& s
   CLI::Option* input = cmd->add_option("input", o.input, "Closed surface (.stl, .ply, .obj or .off)");
   CLI::Option* size = cmd->add_option("--size", o.size, "Target edge length far from every zone (h_max)");
   if (spec.input_required) {
-    input->required();
+    if (!spec.bodies) input->required();  // else input or --body, checked by make_mesh_job
     size->required();
   }
+  if (spec.bodies)
+    cmd->add_option("--body", o.bodies,
+                    "A named solid meshed with the others, NAME=PATH (repeatable; instead of INPUT): "
+                    "region k is the k-th body, its volume groups carry the names; bodies must lie "
+                    "apart (touching or overlapping ones are refused)")
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   size->check(CLI::PositiveNumber);
   cmd->add_option("--refine-edges", o.refine_edges,
                   "Refine along surface edges sharper than ANGLE degrees (a sharp_edges zone)")

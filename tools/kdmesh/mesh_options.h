@@ -16,6 +16,7 @@ namespace kdmesh::cli {
 /// and (for `kdmesh mesh`) its outputs. Defaults are those of `kdmesh mesh --help`.
 struct MeshCliOptions {
   std::string input;
+  std::vector<std::string> bodies;  ///< --body NAME=PATH, instead of input
   double size = 0;
   double refine_edges = 0;  ///< 0: no sharp_edges zone
   double edge_size = 0;     ///< 0: size / 4
@@ -48,6 +49,8 @@ struct MeshCliSpec {
   /// `input` and `--size` are required (kdmesh mesh). When false they are optional and the
   /// subcommand checks them itself (e.g. compare-tetgen, where --config replaces them).
   bool input_required = true;
+  /// --body NAME=PATH (repeatable): several named solids instead of `input` (kdmesh mesh).
+  bool bodies = true;
   /// The output options (-o, --summary, --nodes, --msh, --inp, --medit, --boundary-vtu, --xdmf, --exodus,
   /// --element-order, --msh-version, --patch-groups).
   bool outputs = true;
