@@ -17,6 +17,8 @@
 #include "tools/app/job_process.h"
 
 #ifdef KDMESH_WITH_MPI
+#define OMPI_SKIP_MPICXX 1  // the C API only: no C++ bindings library to link
+#define MPICH_SKIP_MPICXX 1
 #include <mpi.h>
 #endif
 
