@@ -52,12 +52,15 @@ TEST(CliMpiBatch, JobsSpreadOverRanksFailAloneAndWriteTheSameFiles) {
       kdmesh::test::run_kdmesh("batch " + yaml.string() + " --out-dir " + (dir / "single").string() + " --json -q", dir);
   ASSERT_EQ(single.code, 4) << single.err;  // the failed job's code
   // As root (CI), OpenMPI wants both variables; --oversubscribe: 3 ranks on 2 cores. In the
-  // sanitizer build, OpenMPI's own allocations kept until exit are not ours to report.
-  const std::string lsan = "LSAN_OPTIONS=suppressions=" + std::string(KDMESH_SOURCE_DIR) +
-                           "/tests/support/lsan_openmpi.supp:print_suppressions=0";
+  // sanitizer build the ranks run without leak checking (ASan's other checks stay on):
+  // OpenMPI's plugins are dlopen()ed and closed again at MPI_Finalize, so LeakSanitizer
+  // reports their allocations kept until exit from unknown modules, where no suppression by
+  // library can reach them. The same job code is leak-checked in the single-process run above
+  // and in every other CLI test.
   const CliResult mpi = kdmesh::test::run_kdmesh(
       "batch " + yaml.string() + " --out-dir " + (dir / "mpi").string() + " --json -q", dir,
-      lsan + " OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe -np 3");
+      "ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+      "mpirun --oversubscribe -np 3");
   ASSERT_EQ(mpi.code, 4) << mpi.err;
   const nlohmann::json j = nlohmann::json::parse(mpi.out);  // one document: rank 0's alone
   EXPECT_EQ(j["succeeded"], 3);
