@@ -307,13 +307,7 @@ PreparedSurface prepare_one(const Job& job, SurfaceMesh raw, const std::string& 
     for (const std::string& n : rep.notes) so.notice(n);
     if (rep.changed()) so.notice("facet ids in later messages about " + input + " refer to the repaired surface");
     if (!report.repairs) report.repairs = SurfaceRepairReport{};
-    SurfaceRepairReport& all = *report.repairs;  // summed over the bodies
-    all.removed_collapsed += rep.removed_collapsed;
-    all.split_caps += rep.split_caps;
-    all.unfixed_caps += rep.unfixed_caps;
-    all.removed_duplicates += rep.removed_duplicates;
-    all.flipped += rep.flipped;
-    all.notes.insert(all.notes.end(), rep.notes.begin(), rep.notes.end());
+    report.repairs->add(rep);  // summed over the bodies
   }
   return prepare_with_hint(std::move(raw), input, params, so);
 }
@@ -357,26 +351,19 @@ PreparedSurface prepare(const Job& job, std::vector<NamedSurface> bodies, bool n
   return surface;
 }
 
-/// Each named body's region against its solid: volumes and tet counts into the report; a
-/// region whose volume is off beyond the check's tolerance is a failure of the check.
+/// Each named body's region against its solid: the check's volume of the region and its tet
+/// count into the report; a region whose volume is off beyond the check's tolerance is a
+/// failure of the check.
 void check_body_volumes(const Job& job, const VolumeMesh& mesh, MeshCheck& check) {
   std::vector<MeshReport::Body>& bodies = job.report.bodies;
   if (bodies.empty()) return;
   for (MeshReport::Body& b : bodies) b.mesh_volume = 0, b.tets = 0;
-  const PointSet& p = mesh.nodes.points;
-  for (std::size_t t = 0; t < mesh.num_tets(); ++t) {
-    const std::uint32_t* v = &mesh.tets[4 * t];
-    const std::uint32_t r = mesh.tet_region[t];
-    if (r >= bodies.size()) throw Error("internal error: tet " + std::to_string(t) + " in region " + std::to_string(r));
-    const double* a = p.p(v[0]);
-    double e[3][3];
-    for (int i = 0; i < 3; ++i)
-      for (int k = 0; k < 3; ++k) e[i][k] = p.p(v[i + 1])[k] - a[k];
-    bodies[r].mesh_volume += (e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
-                              e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
-                              e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0])) / 6;
+  for (const std::uint32_t r : mesh.tet_region) {
+    if (r >= bodies.size()) throw Error("internal error: a tet in region " + std::to_string(r));
     ++bodies[r].tets;
   }
+  for (std::size_t r = 0; r < bodies.size() && r < check.region_volume.size(); ++r)
+    bodies[r].mesh_volume = check.region_volume[r];
   for (MeshReport::Body& b : bodies) {
     b.volume_error = std::abs(b.mesh_volume - b.solid_volume) / b.solid_volume;
     if (!(b.volume_error <= job.params.check.volume_tolerance)) {

@@ -11,22 +11,14 @@
 
 #include "mesher/mesh_solid.h"
 #include "mesher/surface/surface_bodies.h"
+#include "tests/support/box_surface.h"
 
 namespace kdmesh {
 namespace {
 
 using V3 = std::array<double, 3>;
 
-/// The box [lo, hi] as 8 points and 12 outward triangles.
-SurfaceMesh box_at(V3 lo, V3 hi) {
-  SurfaceMesh s;
-  for (int i = 0; i < 8; ++i)
-    s.points.push_back((i & 1) ? hi[0] : lo[0], (i >> 1 & 1) ? hi[1] : lo[1], (i >> 2 & 1) ? hi[2] : lo[2]);
-  for (std::uint32_t x : {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
-                          2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5})
-    s.tris.push_back(x);
-  return s;
-}
+using test::box_surface;
 
 /// Two shells in one surface (`inner` is then a void of `outer`'s solid).
 SurfaceMesh with_void(SurfaceMesh outer, const SurfaceMesh& inner) {
@@ -80,7 +72,7 @@ BodyContactError contact_error(std::vector<NamedSurface> bodies) {
 TEST(MeshBodies, EachBodyIsItsRegionInListOrder) {
   MeshParams p = params(0.25);
   p.fe_groups = true;
-  const MeshResult r = mesh_solid(two("right", box_at({2, 0, 0}, {3, 1, 1}), "left", box_at({0, 0, 0}, {1, 1, 1})), p);
+  const MeshResult r = mesh_solid(two("right", box_surface({2, 0, 0}, {3, 1, 1}), "left", box_surface({0, 0, 0}, {1, 1, 1})), p);
   const VolumeMesh& m = r.mesh;
   ASSERT_EQ(r.report.bodies.size(), 2u);
   std::size_t in[2] = {0, 0}, wrong = 0;
@@ -115,7 +107,7 @@ TEST(MeshBodies, EachBodyIsItsRegionInListOrder) {
 // The two boxes share the face x = 1 (separate points and triangles, as separately exported
 // parts are): refused, naming both, at a point of that face.
 TEST(MeshBodies, TouchingBodiesAreRefusedNamingBothAndAPointOnTheSharedFace) {
-  const BodyContactError e = contact_error(two("a", box_at({0, 0, 0}, {1, 1, 1}), "b", box_at({1, 0, 0}, {2, 1, 1})));
+  const BodyContactError e = contact_error(two("a", box_surface({0, 0, 0}, {1, 1, 1}), "b", box_surface({1, 0, 0}, {2, 1, 1})));
   EXPECT_EQ(e.code(), ExitCode::geometry);
   EXPECT_EQ(e.names()[0], "a");
   EXPECT_EQ(e.names()[1], "b");
@@ -132,7 +124,7 @@ TEST(MeshBodies, TouchingBodiesAreRefusedNamingBothAndAPointOnTheSharedFace) {
 
 // Touching along one edge only (x = 1, y = 1) is contact too: closed facets.
 TEST(MeshBodies, BodiesTouchingAlongAnEdgeAreRefused) {
-  const BodyContactError e = contact_error(two("a", box_at({0, 0, 0}, {1, 1, 1}), "b", box_at({1, 1, 0}, {2, 2, 1})));
+  const BodyContactError e = contact_error(two("a", box_surface({0, 0, 0}, {1, 1, 1}), "b", box_surface({1, 1, 0}, {2, 2, 1})));
   EXPECT_EQ(e.where()[0], 1.0);
   EXPECT_EQ(e.where()[1], 1.0);
   EXPECT_TRUE(inside(e.where(), {1, 1, 0}, {1, 1, 1}));
@@ -141,7 +133,7 @@ TEST(MeshBodies, BodiesTouchingAlongAnEdgeAreRefused) {
 // A bar pushed halfway into a box: the point lies on both surfaces.
 TEST(MeshBodies, CrossingBodiesAreRefusedAtAPointOnBothSurfaces) {
   const V3 blo{0.5, 0.25, 0.25}, bhi{1.5, 0.75, 0.75};
-  const BodyContactError e = contact_error(two("box", box_at({0, 0, 0}, {1, 1, 1}), "bar", box_at(blo, bhi)));
+  const BodyContactError e = contact_error(two("box", box_surface({0, 0, 0}, {1, 1, 1}), "bar", box_surface(blo, bhi)));
   const V3 w = e.where();
   EXPECT_TRUE(inside(w, {0, 0, 0}, {1, 1, 1}));
   EXPECT_TRUE(inside(w, blo, bhi));
@@ -157,7 +149,7 @@ TEST(MeshBodies, CrossingBodiesAreRefusedAtAPointOnBothSurfaces) {
 // A body wholly inside another's material: its surface would be read as a void of the other;
 // refused, at a corner of the inner body.
 TEST(MeshBodies, BodyInsideAnothersMaterialIsRefused) {
-  const BodyContactError e = contact_error(two("outer", box_at({0, 0, 0}, {3, 3, 3}), "inner", box_at({1, 1, 1}, {2, 2, 2})));
+  const BodyContactError e = contact_error(two("outer", box_surface({0, 0, 0}, {3, 3, 3}), "inner", box_surface({1, 1, 1}, {2, 2, 2})));
   EXPECT_EQ(e.names()[0], "outer");
   EXPECT_EQ(e.names()[1], "inner");
   for (int k = 0; k < 3; ++k) EXPECT_TRUE(e.where()[k] == 1.0 || e.where()[k] == 2.0) << k;
@@ -167,8 +159,8 @@ TEST(MeshBodies, BodyInsideAnothersMaterialIsRefused) {
 // A core in the void of a hollow body is apart from it: both are meshed, each its region, the
 // hollow one without the void.
 TEST(MeshBodies, BodyInAnothersVoidIsKept) {
-  const SurfaceMesh hollow = with_void(box_at({0, 0, 0}, {3, 3, 3}), box_at({0.5, 0.5, 0.5}, {2.5, 2.5, 2.5}));
-  const MeshResult r = mesh_solid(two("hollow", hollow, "core", box_at({1, 1, 1}, {2, 2, 2})), params(0.4));
+  const SurfaceMesh hollow = with_void(box_surface({0, 0, 0}, {3, 3, 3}), box_surface({0.5, 0.5, 0.5}, {2.5, 2.5, 2.5}));
+  const MeshResult r = mesh_solid(two("hollow", hollow, "core", box_surface({1, 1, 1}, {2, 2, 2})), params(0.4));
   ASSERT_EQ(r.report.bodies.size(), 2u);
   EXPECT_NEAR(r.report.bodies[0].solid_volume, 27.0 - 8.0, 1e-9);
   EXPECT_NEAR(r.report.bodies[1].solid_volume, 1.0, 1e-12);
@@ -186,10 +178,10 @@ TEST(MeshBodies, BodyInAnothersVoidIsKept) {
 
 // One body's own defect is reported as for a single surface: its file and its own facet ids.
 TEST(MeshBodies, ABodysSurfaceErrorNamesItsOwnInput) {
-  SurfaceMesh open = box_at({2, 0, 0}, {3, 1, 1});
+  SurfaceMesh open = box_surface({2, 0, 0}, {3, 1, 1});
   open.tris.resize(open.tris.size() - 3);  // facet 11 gone: an open surface
   try {
-    mesh_solid(two("whole", box_at({0, 0, 0}, {1, 1, 1}), "open", open), params(0.3));
+    mesh_solid(two("whole", box_surface({0, 0, 0}, {1, 1, 1}), "open", open), params(0.3));
     FAIL() << "no SurfaceError";
   } catch (const BodyContactError& e) {
     FAIL() << "a contact error for a defect of one body: " << e.what();
@@ -203,11 +195,11 @@ TEST(MeshBodies, ABodysSurfaceErrorNamesItsOwnInput) {
 
 TEST(MeshBodies, BadBodyListsAreUsageErrors) {
   EXPECT_THROW(mesh_solid(std::vector<NamedSurface>{}, params(0.3)), UsageError);
-  EXPECT_THROW(mesh_solid(two("", box_at({0, 0, 0}, {1, 1, 1}), "b", box_at({2, 0, 0}, {3, 1, 1})), params(0.3)),
+  EXPECT_THROW(mesh_solid(two("", box_surface({0, 0, 0}, {1, 1, 1}), "b", box_surface({2, 0, 0}, {3, 1, 1})), params(0.3)),
                UsageError);
-  EXPECT_THROW(mesh_solid(two("a b", box_at({0, 0, 0}, {1, 1, 1}), "b", box_at({2, 0, 0}, {3, 1, 1})), params(0.3)),
+  EXPECT_THROW(mesh_solid(two("a b", box_surface({0, 0, 0}, {1, 1, 1}), "b", box_surface({2, 0, 0}, {3, 1, 1})), params(0.3)),
                UsageError);
-  EXPECT_THROW(mesh_solid(two("a", box_at({0, 0, 0}, {1, 1, 1}), "a", box_at({2, 0, 0}, {3, 1, 1})), params(0.3)),
+  EXPECT_THROW(mesh_solid(two("a", box_surface({0, 0, 0}, {1, 1, 1}), "a", box_surface({2, 0, 0}, {3, 1, 1})), params(0.3)),
                UsageError);
 }
 

@@ -15,20 +15,14 @@
 #include "io/vtu_writer.h"
 #include "mesher/mesh_solid.h"
 #include "mesher/surface/surface_prepare.h"
+#include "tests/support/box_surface.h"
 #include "tools/app/mesh_job.h"
 
 namespace kdmesh {
 namespace {
 
 /// The box [0,a] x [0,b] x [0,c] as 8 points and 12 outward triangles.
-SurfaceMesh box(double a, double b, double c) {
-  SurfaceMesh s;
-  for (int i = 0; i < 8; ++i) s.points.push_back((i & 1) ? a : 0, (i >> 1 & 1) ? b : 0, (i >> 2 & 1) ? c : 0);
-  for (std::uint32_t x : {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
-                          2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5})
-    s.tris.push_back(x);
-  return s;
-}
+SurfaceMesh box(double a, double b, double c) { return test::box_surface({0, 0, 0}, {a, b, c}); }
 
 MeshParams params(double size) {
   MeshParams p;

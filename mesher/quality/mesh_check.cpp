@@ -71,9 +71,13 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
 
   // ---- per tet: exact orientation, centroid inside, volume ----
   std::vector<std::uint8_t> bad_orient(nt, 0), outside(nt, 0);
-  std::vector<double> vol_part(64, 0.0);
+  const bool regions = mesh.tet_region.size() == nt;
+  const std::size_t nr =
+      regions && nt ? std::size_t(*std::max_element(mesh.tet_region.begin(), mesh.tet_region.end())) + 1 : 1;
+  std::vector<double> vol_part(64, 0.0), region_part(64 * nr, 0.0);  // per part; per part and region
   parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned w) {
     double vol = 0;
+    std::vector<double> rv(nr, 0.0);
     for (std::size_t t = b; t < e; ++t) {
       const std::uint32_t* v = &mesh.tets[4 * t];
       const double *a = pts.p(v[0]), *bb = pts.p(v[1]), *cc = pts.p(v[2]), *d = pts.p(v[3]);
@@ -85,12 +89,18 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
       const double u[3] = {bb[0] - a[0], bb[1] - a[1], bb[2] - a[2]};
       const double x[3] = {cc[0] - a[0], cc[1] - a[1], cc[2] - a[2]};
       const double y[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-      vol += (u[0] * (x[1] * y[2] - x[2] * y[1]) + u[1] * (x[2] * y[0] - x[0] * y[2]) +
-              u[2] * (x[0] * y[1] - x[1] * y[0])) / 6;
+      const double tv = (u[0] * (x[1] * y[2] - x[2] * y[1]) + u[1] * (x[2] * y[0] - x[0] * y[2]) +
+                         u[2] * (x[0] * y[1] - x[1] * y[0])) / 6;
+      vol += tv;
+      rv[regions ? mesh.tet_region[t] : 0] += tv;
     }
     vol_part[w] += vol;
+    for (std::size_t r = 0; r < nr; ++r) region_part[w * nr + r] += rv[r];
   }, 1024, 64);
   for (double v : vol_part) c.mesh_volume += v;
+  c.region_volume.assign(nr, 0.0);
+  for (std::size_t w = 0; w < 64; ++w)
+    for (std::size_t r = 0; r < nr; ++r) c.region_volume[r] += region_part[w * nr + r];
   {
     std::ostringstream o, s, f;
     for (std::size_t t = 0; t < nt; ++t) {

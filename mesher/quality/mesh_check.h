@@ -22,6 +22,9 @@ struct MeshCheck {
   std::size_t open_edges = 0;            ///< boundary edges with != 2 boundary faces
   std::size_t nonmanifold_vertices = 0;  ///< boundary vertices whose faces form > 1 fan
   double mesh_volume = 0, solid_volume = 0;
+  /// The mesh's volume per region (index: VolumeMesh::tet_region id; one entry when the mesh
+  /// has no regions), summed in the same pass as mesh_volume.
+  std::vector<double> region_volume;
   double volume_error = 0;               ///< |mesh - solid| / solid
   bool volume_off = false;               ///< volume_error beyond the tolerance
   std::vector<std::string> failures;     ///< one line per failed property, naming examples

@@ -40,6 +40,15 @@ struct SurfaceRepairReport {
   std::size_t flipped = 0;             ///< facets flipped to agree with their piece
   std::vector<std::string> notes;      ///< one line per kind of change, naming facets
   bool changed() const { return removed_collapsed + split_caps + removed_duplicates + flipped > 0; }
+  /// Adds another report's counts and notes (several bodies' repairs reported as one).
+  void add(const SurfaceRepairReport& o) {
+    removed_collapsed += o.removed_collapsed;
+    split_caps += o.split_caps;
+    unfixed_caps += o.unfixed_caps;
+    removed_duplicates += o.removed_duplicates;
+    flipped += o.flipped;
+    notes.insert(notes.end(), o.notes.begin(), o.notes.end());
+  }
 };
 
 /// "degenerate,duplicates,orientation" / "all" / "none" -> options; UsageError naming `what`
