@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <thread>
 #include <utility>
@@ -149,6 +151,53 @@ struct Meshed {
   MeshCheck check;
 };
 
+/// Quality refinement: when the quality pass leaves a few tets below its target angle (isolated
+/// places, not whole sharp edges of the input: at most kQualityRefinementPlaces tets), and the
+/// worst is below the input's own smallest edge angle (smallest_edge_angle: no mesh does better
+/// than that), the size is halved around them and the job meshed again, at most
+/// kQualityRefinements times within max_refinements; the mesh with the better worst tet is kept. (triceratops.ply at diag/20:
+/// one tet at 11.89 deg on an input facet with a 156 deg angle between three feature edges,
+/// which no local operation of the pass improved; 12.68 deg after one refinement.)
+constexpr std::size_t kQualityRefinementPlaces = 32;
+constexpr int kQualityRefinements = 2;
+
+std::string format_deg(double deg) {
+  std::ostringstream m;
+  m.precision(4);
+  m << deg << " deg";
+  return m.str();
+}
+
+/// The angle whose sine is s, in degrees (tet_sine's scale: the min dihedral equivalent).
+double sine_deg(double s) { return std::asin(std::clamp(s, -1.0, 1.0)) * 180 / std::numbers::pi; }
+std::string format_sine_deg(double s) { return format_deg(sine_deg(s)); }
+
+/// Whether the quality pass's result a is better than b: a worst tet better by more than
+/// rounding (1e-6 in sine), or as bad and fewer tets below the target.
+bool better_quality(const ImproveStats& a, const ImproveStats& b) {
+  constexpr double kSame = 1e-6;
+  if (a.worst_sine > b.worst_sine + kSame) return true;
+  return a.worst_sine >= b.worst_sine - kSame && a.below_target < b.below_target;
+}
+
+/// A checked mesh kept while a quality refinement runs, with the report's figures that
+/// describe it (the refinement overwrites them).
+struct QualityKept {
+  Meshed m;
+  MeshReport::Counts counts;
+  std::map<std::string, double> mesh_stages;
+  std::optional<ImproveStats> improve;
+  /// Puts the figures back, says why, and returns the kept mesh.
+  Meshed restore(const Job& job, const std::string& why) {
+    job.report.counts = counts;
+    job.report.mesh_stages = mesh_stages;
+    job.report.improve = improve;
+    job.notice("quality refinement: the mesh made again is not kept (" + why + "); the earlier mesh (worst tet " +
+               format_sine_deg(improve->worst_sine) + ") is");
+    return std::move(m);
+  }
+};
+
 /// Adds a point zone of half the local size at each place of `where` (3 coordinates each)
 /// whose local size is still above min_size; returns how many it added.
 std::size_t refine_at(const std::vector<double>& where, const SizingField& sizing, SizingOptions& o) {
@@ -211,6 +260,9 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
   const MeshParams& params = job.params;
   MeshReport& report = job.report;
   const std::size_t user_zones = options.zones.size();
+  std::optional<QualityKept> kept;  // the best checked mesh while quality refinements run
+  int quality_tries = 0;
+  const double input_angle = smallest_edge_angle(surface.mesh);
   for (int attempt = 0;; ++attempt) {
     Stopwatch clock;
     job.log("sizing field (" + std::to_string(user_zones) + " zones" +
@@ -242,6 +294,7 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
       m.mesh = mesh_volume({surface, query, m.sizing}, std::move(nodes), vo);
     } catch (const BoundaryRecoveryError& e) {
       job.add_seconds("mesh", clock.seconds());
+      if (kept) return kept->restore(job, "the boundary was not recovered (" + std::string(e.what()) + ")");
       const std::size_t added = attempt < params.max_refinements ? refine_at(e.where(), m.sizing, options) : 0;
       if (added == 0)
         throw GeometryError(std::string(e.what()) +
@@ -286,8 +339,29 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
     job.log("checking the mesh");
     m.check = check_volume_mesh(m.mesh, {surface, query, m.sizing}, params.check);
     job.add_seconds("mesh_check", clock.seconds());
+    if (kept && !m.check.ok() && (!m.check.only_sizing_failures() || attempt >= params.max_refinements))
+      return kept->restore(job, "its mesh check failed");
+    if (m.check.ok() && report.improve) {
+      const ImproveStats& st = *report.improve;
+      if (kept && !better_quality(st, *kept->improve))
+        return kept->restore(job, "its worst tet is " + format_sine_deg(st.worst_sine) + " with " +
+                                      std::to_string(st.below_target) + " tet(s) below the target, not better");
+      if (st.below_target == 0 || st.below_target > kQualityRefinementPlaces || quality_tries == kQualityRefinements ||
+          attempt >= params.max_refinements || sine_deg(st.worst_sine) >= input_angle - 1e-6)
+        return m;
+      const std::size_t added = refine_at(st.below_target_at, m.sizing, options);
+      if (added == 0) return m;
+      ++quality_tries;
+      job.notice("quality: " + std::to_string(st.below_target) + " tet(s) below " +
+                 format_deg(ImproveOptions{}.target_angle) + " after the quality pass (worst " +
+                 format_sine_deg(st.worst_sine) + first_place(st.below_target_at) + "): size halved around " +
+                 std::to_string(added) + " of them, meshing again (refinement " + std::to_string(attempt + 1) + ")");
+      kept = QualityKept{std::move(m), report.counts, report.mesh_stages, report.improve};
+      continue;
+    }
     if (m.check.ok() || !m.check.only_sizing_failures()) return m;
     const std::size_t added = attempt < params.max_refinements ? refine_at(m.check.refine_at, m.sizing, options) : 0;
+    if (added == 0 && kept) return kept->restore(job, "its mesh check failed");
     if (added == 0) return m;  // the caller reports the failed check
     job.notice("the mesh check found the boundary too far from the surface at " +
                std::to_string(m.check.refine_at.size() / 3) + " place(s)" + first_place(m.check.refine_at) +

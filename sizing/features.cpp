@@ -56,4 +56,24 @@ FeatureEdges detect_sharp_edges(const SurfaceMesh& surface, double angle_deg) {
   return out;
 }
 
+double smallest_edge_angle(const SurfaceMesh& surface) {
+  double smallest = 180;
+  for (const SurfaceEdge& e : surface_edges(surface)) {
+    if (!e.manifold() || !std::isfinite(e.deviation)) continue;
+    // The vertex of f1 off the edge, against the plane of f0: below it (outward normals), the
+    // edge is convex and the solid's angle there is pi - deviation; else pi + deviation.
+    const std::uint32_t* t0 = surface.tri(e.f0);
+    const std::uint32_t* t1 = surface.tri(e.f1);
+    std::uint32_t off = t1[0];
+    for (int k = 0; k < 3; ++k)
+      if (t1[k] != e.lo && t1[k] != e.hi) off = t1[k];
+    const double* p0 = surface.points.p(t0[0]);
+    const Vec3 n = vec3::cross(sub(surface.points.p(t0[1]), p0), sub(surface.points.p(t0[2]), p0));
+    const bool convex = vec3::dot(n, sub(surface.points.p(off), p0)) <= 0;
+    const double deg = (convex ? std::numbers::pi - e.deviation : std::numbers::pi + e.deviation) * 180 / std::numbers::pi;
+    smallest = std::min(smallest, deg);
+  }
+  return smallest;
+}
+
 }  // namespace kdmesh

@@ -33,4 +33,11 @@ struct FeatureEdges {
 /// more than angle_deg.
 FeatureEdges detect_sharp_edges(const SurfaceMesh& surface, double angle_deg);
 
+/// The smallest dihedral angle of the solid at an edge of its outward-oriented surface, in
+/// degrees (90 for a box; a wedge's angle at its sharp edge; over 180 at a re-entrant edge),
+/// over the edges shared by exactly two facets; 180 if there is none. No tet of a conforming
+/// mesh can have a smaller largest-possible dihedral at that edge: the tets around it share
+/// this angle.
+double smallest_edge_angle(const SurfaceMesh& surface);
+
 }  // namespace kdmesh

@@ -344,6 +344,25 @@ SplitCounts split_pass(ImproveTets& m, SineCache& cache, double threshold, int m
   return n;
 }
 
+/// Fills st's below_target, worst_sine and below_target_at from the cache (the mesh's final state).
+void record_below_target(const ImproveTets& m, const SineCache& cache, double target, ImproveStats& st) {
+  std::vector<std::pair<double, std::uint32_t>> below;
+  for (std::uint32_t t = 0; t < m.capacity(); ++t) {
+    if (!m.alive(t)) continue;
+    const double q = cache.q()[t];
+    st.worst_sine = std::min(st.worst_sine, q);
+    if (q < target) below.push_back({q, t});
+  }
+  st.below_target = below.size();
+  std::sort(below.begin(), below.end());
+  below.resize(std::min(below.size(), ImproveStats::kBelowTargetPlaces));
+  for (const auto& [q, t] : below) {
+    const std::uint32_t* v = m.v(t);
+    for (int k = 0; k < 3; ++k)
+      st.below_target_at.push_back((m.p(v[0])[k] + m.p(v[1])[k] + m.p(v[2])[k] + m.p(v[3])[k]) / 4);
+  }
+}
+
 }  // namespace
 
 ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain, const ImproveOptions& options) {
@@ -466,6 +485,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain, const ImproveO
     stage("final", ops);
   }
   if (options.progress) options.progress("improve", 1.0);
+  record_below_target(m, cache, deg_to_sine(options.target_angle), st);
   st.edge_removals = c.edge_removals;
   st.face_removals = c.face_removals;
   st.boundary_flips = c.boundary_flips;

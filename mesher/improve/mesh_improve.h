@@ -94,6 +94,13 @@ struct ImproveStats {
   std::size_t insertions = 0;        ///< slivers replaced by a fan around a new interior node
   int rounds = 0;                    ///< rounds run (rounds .. max_rounds)
   std::size_t boundary_changes = 0;  ///< boundary faces replaced (0: the boundary list is unchanged)
+  /// Tets left below target_angle at the end (by tet_sine, so a max dihedral over 165 deg counts
+  /// too), the sine of the worst tet (1 if there is none), and the centroids of up to
+  /// kBelowTargetPlaces of them, worst first (ties by slot), 3 coordinates each.
+  std::size_t below_target = 0;
+  double worst_sine = 1;
+  std::vector<double> below_target_at;
+  static constexpr std::size_t kBelowTargetPlaces = 64;
   double seconds = 0;
 };
 
