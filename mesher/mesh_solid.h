@@ -71,7 +71,9 @@ struct MeshParams {
   MeshCheckOptions check;
   /// Local refinement: when the boundary cannot be recovered, or the check finds faces too far
   /// from the surface or the volume off, the size is halved around those places and the job
-  /// meshed again, at most this many times (and never below sizing.min_size).
+  /// meshed again, at most this many times (and never below sizing.min_size). The same budget
+  /// covers quality refinement: up to 2 rounds around isolated tets the quality pass left below
+  /// its 12 deg target, keeping the better mesh (mesher/mesh_solid.cpp); 0 turns both off.
   int max_refinements = 8;
   bool improve = true;         ///< quality improvement after meshing (mesher/improve/mesh_improve.h)
   /// Boundary groups (patches, feature curves, named groups) and the FE mesh (MeshResult::fe):

@@ -47,7 +47,8 @@ namespace kdmesh {
 ///     tolerance    optional mapping {hausdorff (default 0.1, times the local size), volume
 ///                  (default 0.005, relative)}: the mesh check's tolerances
 ///     max_refinements optional integer in [0, 64] (default 8): local refinements (size halved
-///                  where the boundary is not recovered or not within tolerance) before failing
+///                  where the boundary is not recovered or not within tolerance) before failing;
+///                  also the budget of the (at most 2) refinements around tets left below 12 deg
 ///     order        optional order name (mesher/order/order.h: kd-bfs-hilbert, kd-bfs, kd-bfs-alt,
 ///                  kd-local, hilbert, brio, random, input; default kd-bfs-hilbert)
 ///     seed         optional unsigned integer (default 1)

@@ -238,7 +238,7 @@ nlohmann::json improve_json(const ImproveStats& imp) {
           {"boundary_changes", imp.boundary_changes}, {"caps_removed", imp.caps_removed}, {"splits", imp.splits},
           {"boundary_splits", imp.boundary_splits}, {"insertions", imp.insertions},
           {"rounds", imp.rounds}, {"feature_slides", imp.feature_slides},
-          {"boundary_flips", imp.boundary_flips}};
+          {"boundary_flips", imp.boundary_flips}, {"below_target", imp.below_target}};
 }
 
 /// The summary's "counts" block: the figures of the stages reached.

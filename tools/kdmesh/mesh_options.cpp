@@ -150,7 +150,8 @@ void add_mesh_job_options(CLI::App* cmd, MeshCliOptions& o, const MeshCliSpec& s
       ->capture_default_str();
   cmd->add_option("--max-refinements", o.max_refinements,
                   "Local refinements (size halved where the boundary is not recovered or not "
-                  "within tolerance, then meshed again) before giving up")
+                  "within tolerance, then meshed again) before giving up; also bounds the (at most 2) "
+                  "refinements around isolated tets left below 12 deg")
       ->check(CLI::Range(0, 64))
       ->capture_default_str();
   cmd->add_option("--scale", o.scale, "Multiply the coordinates by this")
