@@ -93,4 +93,24 @@ TEST(CliMpiBatch, ShardsSplitTheBatchAndTogetherRunEachJobOnce) {
   EXPECT_NE(bad.err.find("--shard '2/2'"), std::string::npos) << bad.err;
 }
 
+// Regression (stop 30's note): a configuration error under mpirun was printed by every rank,
+// N copies of one message. Rank 0 alone reports it; the exit code is the error's.
+TEST(CliMpiBatch, ConfigErrorIsReportedOnceUnderMpirun) {
+  KDMESH_NEED_CLIENT(kdmesh::test::have_command("mpirun"), "mpirun (openmpi-bin)");
+  const fs::path dir = kdmesh::test::fresh_dir(tmpdir(), "config_error");
+  std::ofstream(dir / "jobs.yaml") << "jobs:\n  - {name: a, input: a.stl, size: -1}\n";
+  const CliResult single = kdmesh::test::run_kdmesh("batch " + (dir / "jobs.yaml").string() + " -q", dir);
+  ASSERT_NE(single.code, 0);
+  const CliResult mpi = kdmesh::test::run_kdmesh(
+      "batch " + (dir / "jobs.yaml").string() + " -q", dir,
+      "ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+      "mpirun --oversubscribe -np 3");
+  EXPECT_EQ(mpi.code, single.code) << mpi.err;
+  std::size_t copies = 0;
+  for (std::size_t at = mpi.err.find("kdmesh: error:"); at != std::string::npos; at = mpi.err.find("kdmesh: error:", at + 1))
+    ++copies;
+  EXPECT_EQ(copies, 1u) << mpi.err;
+  EXPECT_NE(mpi.err.find(single.err.substr(0, single.err.find('\n'))), std::string::npos) << mpi.err;
+}
+
 }  // namespace

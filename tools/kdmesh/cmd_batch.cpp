@@ -90,7 +90,7 @@ void print_table(std::ostream& os, const std::vector<MeshJobResult>& results) {
   }
 }
 
-int run_batch(const Options& o) {
+int run_batch_as(const Options& o, const MpiWorld& world) {
   const Output& out = o.out;
   Stopwatch total;
   BatchLoadOptions lo;
@@ -99,7 +99,6 @@ int run_batch(const Options& o) {
   const double limit = o.max_memory.empty() ? 0 : parse_memory_amount(o.max_memory, "--max-memory");
   lo.max_memory = limit;
   const std::optional<Shard> shard = o.shard.empty() ? std::nullopt : std::optional(parse_shard(o.shard, "--shard"));
-  const MpiWorld world = mpi_world_from_environment();
   if (world.size > 1 && !mpi_available())
     throw UsageError("started by mpirun with " + std::to_string(world.size) +
                      " ranks, but this kdmesh was built without MPI (libopenmpi-dev was missing): every "
@@ -198,6 +197,19 @@ int run_batch(const Options& o) {
   if (code != 0)
     std::cerr << "kdmesh: error: " << failed << " of " << jobs.size() << " jobs failed" << std::endl;
   return code;
+}
+
+/// Under mpirun every rank reads the same command line and configuration, so an error before
+/// the ranks split the work is the same on each: rank 0 reports it, the others exit with its
+/// code quietly (N copies of one message before).
+int run_batch(const Options& o) {
+  const MpiWorld world = mpi_world_from_environment();
+  try {
+    return run_batch_as(o, world);
+  } catch (const Error& e) {
+    if (world.size > 1 && world.rank != 0) return int(e.code());
+    throw;
+  }
 }
 
 }  // namespace
