@@ -602,6 +602,44 @@ TEST(VolumeMesh, PipelineOnIcosphere) {
   EXPECT_LT(c.volume_error, 1e-9);
 }
 
+// The check certifies a boundary vertex or face without a tree query when its corners lie on
+// the facet their nodes record (the distance to one facet bounds the distance to the surface,
+// and is convex over a face). Its figures must be those of the tree queries alone: the
+// largest face distance against 7 samples per face by SurfaceQuery::distance. The icosphere
+// of 320 facets at h = 0.12 has faces on one facet (certified); that of 5,120 facets at
+// h = 0.2 has faces across several, off the curved surface (queried).
+TEST(VolumeMesh, CheckFacetCertificateGivesTheTreeQueriesFigures) {
+  for (const auto& [levels, size] : {std::pair{2, 0.12}, std::pair{4, 0.2}}) {
+    const PreparedSurface s = prepare_surface(test::icosphere(levels), "icosphere");
+    const SurfaceQuery q(s.mesh);
+    const SizingField h = uniform_size(s, size);
+    const VolumeMesh vm = mesh_volume({s, q, h}, place_nodes({s, q, h}, detect_sharp_edges(s.mesh, 30)));
+    const MeshCheck c = check_volume_mesh(vm, {s, q, h});  // (level 4's volume is off: chords)
+    EXPECT_EQ(c.offsurface_vertices, 0u) << failures(c);
+    static constexpr double kBary[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0.5, 0}, {0, 0.5, 0.5}, {0.5, 0, 0.5},
+                                           {2.0 / 3, 1.0 / 6, 1.0 / 6}, {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
+    double worst = 0;
+    std::size_t on_one_facet = 0;
+    for (std::size_t k = 0; k < vm.boundary.size(); k += 3) {
+      const double* p[3];
+      for (int i = 0; i < 3; ++i) p[i] = vm.nodes.points.p(vm.boundary[k + i]);
+      double cen[3], face = 0;
+      for (int d = 0; d < 3; ++d) cen[d] = (p[0][d] + p[1][d] + p[2][d]) / 3;
+      for (const auto& w : kBary) {
+        double x[3];
+        for (int d = 0; d < 3; ++d) x[d] = w[0] * p[0][d] + w[1] * p[1][d] + w[2] * p[2][d];
+        face = std::max(face, q.distance(x));
+      }
+      worst = std::max(worst, face / h(cen));
+      const std::uint32_t f0 = vm.nodes.facet[vm.boundary[k]];
+      on_one_facet += f0 == vm.nodes.facet[vm.boundary[k + 1]] && f0 == vm.nodes.facet[vm.boundary[k + 2]];
+    }
+    EXPECT_NEAR(c.max_hausdorff, worst, 1e-12) << levels;
+    if (levels == 2) EXPECT_GT(on_one_facet, 0u);
+    if (levels == 4) EXPECT_GT(worst, 1e-3);
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // The checker on broken meshes: each defect must be reported.
 class CheckNegative : public ::testing::Test {
@@ -683,6 +721,24 @@ TEST_F(CheckNegative, ExtraOutsideTet) {
   // tet adds (1/32) * 0.3 / 3 = 0.003125 to the unit cube's volume (below the 0.5% tolerance:
   // the centroid test is what catches it).
   EXPECT_NEAR(c.volume_error, 0.003125, 1e-12);
+}
+
+// A surface node pushed 0.02 off the cube, keeping the facet it records: its facet no longer
+// certifies it, so the tree measures it, and the faces at it are measured too.
+TEST_F(CheckNegative, SurfaceNodeOffItsFacetIsMeasured) {
+  std::uint32_t v = 0;
+  while (v < vm.nodes.points.size() && vm.nodes.kind[v] != NodeKind::surface) ++v;
+  ASSERT_LT(v, vm.nodes.points.size());
+  double* p = vm.nodes.points.xyz.data() + 3 * std::size_t(v);
+  int axis = 0;  // the cube face it lies on: the coordinate at 0 or 1
+  for (int k = 0; k < 3; ++k)
+    if (p[k] == 0 || p[k] == 1) axis = k;
+  p[axis] += p[axis] == 0 ? -0.02 : 0.02;  // outward
+  const MeshCheck c = check_volume_mesh(vm, {s, *q, h});
+  EXPECT_FALSE(c.ok());
+  EXPECT_EQ(c.offsurface_vertices, 1u);
+  EXPECT_TRUE(mentions(c, "(distance 0.02")) << failures(c);
+  EXPECT_NEAR(c.max_hausdorff, 0.02 / 0.25 * 2.0 / 3.0, 1e-12) << failures(c);  // its faces' samples
 }
 
 // Swapping two vertices of one tet inverts it.

@@ -19,6 +19,7 @@
 
 #include "core/error.h"
 #include "core/timer.h"
+#include "core/triangle_distance.h"
 #include "mesher/placement/edge_sampling.h"
 #include "mesher/delaunay/predicates.h"
 
@@ -48,50 +49,6 @@ double segment_dist(const double* x, const double* a, const double* b, double* t
   return dist(x, p);
 }
 
-/// Closest point to p on triangle (a, b, c) (Ericson, Real-Time Collision Detection 5.1.5).
-void closest_on_triangle(const double* p, const double* a, const double* b, const double* c,
-                         double* out) {
-  double ab[3], ac[3], ap[3];
-  for (int k = 0; k < 3; ++k) ab[k] = b[k] - a[k], ac[k] = c[k] - a[k], ap[k] = p[k] - a[k];
-  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  auto set = [&](const double* q) { std::copy(q, q + 3, out); };
-  if (d1 <= 0 && d2 <= 0) return set(a);
-  double bp[3];
-  for (int k = 0; k < 3; ++k) bp[k] = p[k] - b[k];
-  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return set(b);
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    const double v = d1 / (d1 - d3);
-    for (int k = 0; k < 3; ++k) out[k] = a[k] + v * ab[k];
-    return;
-  }
-  double cp[3];
-  for (int k = 0; k < 3; ++k) cp[k] = p[k] - c[k];
-  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return set(c);
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    const double w = d2 / (d2 - d6);
-    for (int k = 0; k < 3; ++k) out[k] = a[k] + w * ac[k];
-    return;
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    for (int k = 0; k < 3; ++k) out[k] = b[k] + w * (c[k] - b[k]);
-    return;
-  }
-  const double denom = 1 / (va + vb + vc);
-  const double v = vb * denom, w = vc * denom;
-  for (int k = 0; k < 3; ++k) out[k] = a[k] + ab[k] * v + ac[k] * w;
-}
-
-double triangle_dist(const double* p, const double* a, const double* b, const double* c) {
-  double q[3];
-  closest_on_triangle(p, a, b, c, q);
-  return dist(p, q);
-}
 
 std::string xyz(const double* p) {
   std::ostringstream s;
@@ -398,7 +355,7 @@ BoundaryGroups assign_boundary(const VolumeMesh& mesh, const SurfaceMesh& surfac
     if (f < nt) {
       tol = facet_tol(f);
       const std::uint32_t* t = surface.tri(f);
-      if (triangle_dist(x, surface.points.p(t[0]), surface.points.p(t[1]), surface.points.p(t[2])) > tol)
+      if (triangle_distance(x, surface.points.p(t[0]), surface.points.p(t[1]), surface.points.p(t[2])) > tol)
         f = kNoFacet;
     }
     if (f >= nt) {
@@ -753,7 +710,7 @@ std::vector<FeGroup> make_groups(const std::vector<GroupSpec>& specs, const Surf
       for (std::size_t f = 0; f < nt; ++f) {
         const std::uint32_t* t = surface.tri(f);
         double& dp = d[patches.facet_patch[f]];
-        dp = std::min(dp, triangle_dist(x, surface.points.p(t[0]), surface.points.p(t[1]), surface.points.p(t[2])));
+        dp = std::min(dp, triangle_distance(x, surface.points.p(t[0]), surface.points.p(t[1]), surface.points.p(t[2])));
       }
     } else {
       for (std::uint32_t c = 0; c < ncurves; ++c)

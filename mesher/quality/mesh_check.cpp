@@ -8,8 +8,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
+#include "core/triangle_distance.h"
 #include "mesher/parallel_for.h"
 #include "mesher/delaunay/predicates.h"
 
@@ -179,9 +181,28 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
   for (auto& f : bnd) bverts.insert(bverts.end(), f.begin(), f.end());
   std::sort(bverts.begin(), bverts.end());
   bverts.erase(std::unique(bverts.begin(), bverts.end()), bverts.end());
+  // A point's distance to one facet bounds its distance to the surface from above. Where that
+  // bound through the facet the node records is already within kOnSurfaceDistance, the point
+  // passes without a tree query; otherwise (and for every failure reported) the distance is
+  // the tree's. A convex function's maximum over a triangle is at a corner, so a boundary face
+  // whose three corners are that close to one facet is as close everywhere (below): planar
+  // parts, most of a CAD model's boundary, need no query at all.
+  const double on_surface = kOnSurfaceDistance * diag;
+  const SurfaceMesh& sm = surface.mesh;
+  auto facet_bound = [&](const double* x, std::uint32_t f) {
+    if (f >= sm.num_tris()) return std::numeric_limits<double>::infinity();
+    const std::uint32_t* t = sm.tri(f);
+    return triangle_distance(x, sm.points.p(t[0]), sm.points.p(t[1]), sm.points.p(t[2]));
+  };
+  const std::vector<std::uint32_t>& node_facet = mesh.nodes.facet;
+  auto facet_of = [&](std::uint32_t v) { return v < node_facet.size() ? node_facet[v] : kNoFacet; };
   std::vector<double> vdist(bverts.size());
   parallel_for(bverts.size(), [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t k = b; k < e; ++k) vdist[k] = query.distance(pts.p(bverts[k]));
+    for (std::size_t k = b; k < e; ++k) {
+      const double* x = pts.p(bverts[k]);
+      const double bound = facet_bound(x, facet_of(bverts[k]));
+      vdist[k] = bound <= on_surface ? bound : query.distance(x);
+    }
   }, 256);
   {
     std::ostringstream ex;
@@ -203,6 +224,17 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
       const double *p0 = pts.p(bnd[k][0]), *p1 = pts.p(bnd[k][1]), *p2 = pts.p(bnd[k][2]);
       double worst = 0, cen[3];
       for (int q = 0; q < 3; ++q) cen[q] = (p0[q] + p1[q] + p2[q]) / 3;
+      // All three corners within on_surface of one facet their nodes record: the whole face is.
+      double bound = std::numeric_limits<double>::infinity();
+      for (int i = 0; i < 3 && !(bound <= on_surface); ++i) {
+        const std::uint32_t f = facet_of(bnd[k][i]);
+        if (f == kNoFacet) continue;
+        bound = std::max({facet_bound(p0, f), facet_bound(p1, f), facet_bound(p2, f)});
+      }
+      if (bound <= on_surface) {
+        fdist[k] = bound / sizing(cen);
+        continue;
+      }
       for (auto& w : kBary) {
         double s[3];
         for (int q = 0; q < 3; ++q) s[q] = w[0] * p0[q] + w[1] * p1[q] + w[2] * p2[q];
