@@ -353,8 +353,8 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
       if (added == 0) return m;
       ++quality_tries;
       job.notice("quality: " + std::to_string(st.below_target) + " tet(s) below " +
-                 format_deg(ImproveOptions{}.target_angle) + " after the quality pass (worst " +
-                 format_sine_deg(st.worst_sine) + first_place(st.below_target_at) + "): size halved around " +
+                 format_deg(ImproveOptions{}.target_angle) + " after the quality pass, the worst " +
+                 format_sine_deg(st.worst_sine) + first_place(st.below_target_at) + ": size halved around " +
                  std::to_string(added) + " of them, meshing again (refinement " + std::to_string(attempt + 1) + ")");
       kept = QualityKept{std::move(m), report.counts, report.mesh_stages, report.improve};
       continue;
