@@ -155,9 +155,10 @@ struct Meshed {
 /// places, not whole sharp edges of the input: at most kQualityRefinementPlaces tets), and the
 /// worst is below the input's own smallest edge angle (smallest_edge_angle: no mesh does better
 /// than that), the size is halved around them and the job meshed again, at most
-/// kQualityRefinements times within max_refinements; the mesh with the better worst tet is kept. (triceratops.ply at diag/20:
-/// one tet at 11.89 deg on an input facet with a 156 deg angle between three feature edges,
-/// which no local operation of the pass improved; 12.68 deg after one refinement.)
+/// kQualityRefinements times within max_refinements; the mesh with the better worst tet is
+/// kept. (triceratops.ply at diag/20: one tet at 11.89 deg on an input facet with a 156 deg
+/// angle between three feature edges, which no local operation of the pass improved; 12.69 deg
+/// after one refinement.)
 constexpr std::size_t kQualityRefinementPlaces = 32;
 constexpr int kQualityRefinements = 2;
 

@@ -70,8 +70,8 @@ double smallest_edge_angle(const SurfaceMesh& surface) {
     const double* p0 = surface.points.p(t0[0]);
     const Vec3 n = vec3::cross(sub(surface.points.p(t0[1]), p0), sub(surface.points.p(t0[2]), p0));
     const bool convex = vec3::dot(n, sub(surface.points.p(off), p0)) <= 0;
-    const double deg = (convex ? std::numbers::pi - e.deviation : std::numbers::pi + e.deviation) * 180 / std::numbers::pi;
-    smallest = std::min(smallest, deg);
+    const double angle = convex ? std::numbers::pi - e.deviation : std::numbers::pi + e.deviation;
+    smallest = std::min(smallest, angle * 180 / std::numbers::pi);
   }
   return smallest;
 }
