@@ -187,14 +187,14 @@ struct QualityKept {
   Meshed m;
   MeshReport::Counts counts;
   std::map<std::string, double> mesh_stages;
-  std::optional<ImproveStats> improve;
+  ImproveStats improve;
   /// Puts the figures back, says why, and returns the kept mesh.
   Meshed restore(const Job& job, const std::string& why) {
     job.report.counts = counts;
     job.report.mesh_stages = mesh_stages;
     job.report.improve = improve;
     job.notice("quality refinement: the mesh made again is not kept (" + why + "); the earlier mesh (worst tet " +
-               format_sine_deg(improve->worst_sine) + ") is");
+               format_sine_deg(improve.worst_sine) + ") is");
     return std::move(m);
   }
 };
@@ -344,7 +344,7 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
       return kept->restore(job, "its mesh check failed");
     if (m.check.ok() && report.improve) {
       const ImproveStats& st = *report.improve;
-      if (kept && !better_quality(st, *kept->improve))
+      if (kept && !better_quality(st, kept->improve))
         return kept->restore(job, "its worst tet is " + format_sine_deg(st.worst_sine) + " with " +
                                       std::to_string(st.below_target) + " tet(s) below the target, not better");
       if (st.below_target == 0 || st.below_target > kQualityRefinementPlaces || quality_tries == kQualityRefinements ||
@@ -357,7 +357,7 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
                  format_deg(ImproveOptions{}.target_angle) + " after the quality pass, the worst " +
                  format_sine_deg(st.worst_sine) + first_place(st.below_target_at) + ": size halved around " +
                  std::to_string(added) + " of them, meshing again (refinement " + std::to_string(attempt + 1) + ")");
-      kept = QualityKept{std::move(m), report.counts, report.mesh_stages, report.improve};
+      kept = QualityKept{std::move(m), report.counts, report.mesh_stages, st};
       continue;
     }
     if (m.check.ok() || !m.check.only_sizing_failures()) return m;
