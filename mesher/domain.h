@@ -3,6 +3,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
 
+#include "mesher/surface/region_query.h"
 #include "mesher/surface/surface_prepare.h"
 #include "mesher/surface/surface_query.h"
 #include "sizing/sizing_field.h"
@@ -18,6 +19,9 @@ struct Domain {
   const PreparedSurface& surface;
   const SurfaceQuery& query;
   const SizingField& sizing;
+  /// Touching bodies (surface.interfaces not empty): which body holds a point, and the
+  /// interfaces between them. Null otherwise.
+  const RegionQuery* regions = nullptr;
 };
 
 }  // namespace kdmesh

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -17,6 +18,8 @@
 #include "mesher/placement/node_placement.h"
 #include "mesher/numeric_ranges.h"
 #include "mesher/surface/surface_prepare.h"
+#include "mesher/surface/region_query.h"
+#include "mesher/surface/surface_bodies.h"
 #include "mesher/surface/surface_query.h"
 #include "sizing/features.h"
 
@@ -257,7 +260,7 @@ void announce_curvature(const Job& job, const SizingOptions& options, const Sizi
 /// max_refinements times). Throws what the last attempt threw; a failed check is left to the
 /// caller through Meshed::check.
 Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, const SurfaceQuery& query,
-                            const FeatureEdges& features, SizingOptions options) {
+                            const RegionQuery* regions, const FeatureEdges& features, SizingOptions options) {
   const MeshParams& params = job.params;
   MeshReport& report = job.report;
   const std::size_t user_zones = options.zones.size();
@@ -279,7 +282,7 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
     PlacementOptions po;
     po.seed = params.seed;
     po.progress = job.progress();
-    NodeSet nodes = place_nodes({surface, query, m.sizing}, features, po);
+    NodeSet nodes = place_nodes({surface, query, m.sizing, regions}, features, po);
     job.add_seconds("place", clock.seconds());
     report.counts.placed_nodes = nodes.points.size();
 
@@ -292,7 +295,7 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
     vo.progress = job.progress();
     vo.hausdorff_tolerance = params.check.hausdorff_tolerance;
     try {
-      m.mesh = mesh_volume({surface, query, m.sizing}, std::move(nodes), vo);
+      m.mesh = mesh_volume({surface, query, m.sizing, regions}, std::move(nodes), vo);
     } catch (const BoundaryRecoveryError& e) {
       job.add_seconds("mesh", clock.seconds());
       if (kept) return kept->restore(job, "the boundary was not recovered (" + std::string(e.what()) + ")");
@@ -331,14 +334,14 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
       io.progress = job.progress();
       io.hausdorff_tolerance = params.check.hausdorff_tolerance;
       io.feature_angle = options.feature_angle_deg;
-      report.improve = improve_mesh(m.mesh, {surface, query, m.sizing}, io);
+      report.improve = improve_mesh(m.mesh, {surface, query, m.sizing, regions}, io);
       job.add_seconds("improve", clock.seconds());
       count_mesh(m.mesh, counts);
     }
 
     clock.reset();
     job.log("checking the mesh");
-    m.check = check_volume_mesh(m.mesh, {surface, query, m.sizing}, params.check);
+    m.check = check_volume_mesh(m.mesh, {surface, query, m.sizing, regions}, params.check);
     job.add_seconds("mesh_check", clock.seconds());
     if (kept && !m.check.ok() && (!m.check.only_sizing_failures() || attempt >= params.max_refinements))
       return kept->restore(job, "its mesh check failed");
@@ -460,13 +463,14 @@ FeatureEdges find_features(const Job& job, const PreparedSurface& surface, const
     m << "sharp features (angle " << terms.feature_angle << " deg)";
     job.log(m.str());
   }
-  FeatureEdges features = detect_sharp_edges(surface.mesh, terms.feature_angle);
+  const std::vector<std::uint32_t> rims = interface_rim_edges(surface);
+  FeatureEdges features = detect_sharp_edges(surface.mesh, terms.feature_angle, rims);
   job.report.seconds["features"] = clock.seconds();
   job.report.counts.feature_edges = features.num_edges();
   job.report.counts.feature_corners = features.corners.size();
   job.report.has_features = true;
   if (terms.feature_angle < params.sharp_angle) {
-    const std::size_t sharp = detect_sharp_edges(surface.mesh, params.sharp_angle).num_edges();
+    const std::size_t sharp = detect_sharp_edges(surface.mesh, params.sharp_angle, rims).num_edges();
     if (features.num_edges() > sharp) {
       std::ostringstream m;
       m << "creases: " << features.num_edges() - sharp << " surface edge(s) bent by "
@@ -558,6 +562,8 @@ MeshResult run(const Job& job, std::vector<NamedSurface> bodies, bool named) {
 
   clock.reset();
   const SurfaceQuery query(surface.mesh);
+  std::unique_ptr<const RegionQuery> regions;
+  if (!surface.interfaces.empty()) regions = std::make_unique<const RegionQuery>(surface);
   report.seconds["query"] = clock.seconds();
 
   SizingOptions sizing_options = params.sizing;
@@ -567,7 +573,7 @@ MeshResult run(const Job& job, std::vector<NamedSurface> bodies, bool named) {
   sizing_options.chordal_deviation = terms.chordal_deviation;
   sizing_options.feature_angle_deg = terms.feature_angle;
   thickness_sizes(job, surface, query, ranges.size, sizing_options);
-  Meshed m = mesh_with_refinement(job, surface, query, features, sizing_options);
+  Meshed m = mesh_with_refinement(job, surface, query, regions.get(), features, sizing_options);
   check_body_volumes(job, m.mesh, m.check);
   report.check = m.check;
   report.has_check = true;

@@ -14,20 +14,11 @@
 namespace kdmesh {
 using vec3::Vec3, vec3::angle_between, vec3::sub;
 
-FeatureEdges detect_sharp_edges(const SurfaceMesh& surface, double angle_deg) {
-  FeatureEdges out;
-  if (!(angle_deg > 0 && angle_deg < 180)) return out;  // also rejects NaN
-  // Exact in binary for 45, 90 (angle_deg / 180 is then a power of two).
-  const double threshold = angle_deg / 180.0 * std::numbers::pi;
+namespace {
 
-  for (const SurfaceEdge& e : surface_edges(surface))
-    if (e.deviation >= threshold) {  // non-manifold and orientation-flipping edges: +inf
-      out.edges.push_back(e.lo);
-      out.edges.push_back(e.hi);
-    }
-  // surface_edges is sorted by (lo, hi): out.edges is already sorted and unique.
-
-  // Corners: feature-edge points with != 2 incident feature edges, or where the two turn.
+/// Corners: feature-edge points with != 2 incident feature edges, or where the two turn by
+/// more than `threshold` (radians).
+void find_corners(const SurfaceMesh& surface, double threshold, FeatureEdges& out) {
   std::vector<std::uint32_t> incident;  // (point, other end) pairs, sorted by point
   incident.reserve(2 * out.edges.size());
   for (std::size_t e = 0; e < out.num_edges(); ++e) {
@@ -53,6 +44,36 @@ FeatureEdges detect_sharp_edges(const SurfaceMesh& surface, double angle_deg) {
     if (corner) out.corners.push_back(v);
     i = j;
   }
+}
+
+}  // namespace
+
+FeatureEdges detect_sharp_edges(const SurfaceMesh& surface, double angle_deg,
+                                const std::vector<std::uint32_t>& also) {
+  FeatureEdges out;
+  const bool sharp = angle_deg > 0 && angle_deg < 180;  // also rejects NaN
+  if (!sharp && also.empty()) return out;
+  // Exact in binary for 45, 90 (angle_deg / 180 is then a power of two).
+  const double threshold = sharp ? angle_deg / 180.0 * std::numbers::pi : std::numbers::pi;
+
+  if (sharp)
+    for (const SurfaceEdge& e : surface_edges(surface))
+      if (e.deviation >= threshold) {  // non-manifold and orientation-flipping edges: +inf
+        out.edges.push_back(e.lo);
+        out.edges.push_back(e.hi);
+      }
+  // surface_edges is sorted by (lo, hi): out.edges is already sorted and unique.
+  if (!also.empty()) {
+    std::vector<std::array<std::uint32_t, 2>> all;
+    for (std::size_t k = 0; k < out.edges.size(); k += 2) all.push_back({out.edges[k], out.edges[k + 1]});
+    for (std::size_t k = 0; k + 1 < also.size(); k += 2)
+      all.push_back({std::min(also[k], also[k + 1]), std::max(also[k], also[k + 1])});
+    std::sort(all.begin(), all.end());
+    all.erase(std::unique(all.begin(), all.end()), all.end());
+    out.edges.clear();
+    for (const auto& e : all) out.edges.insert(out.edges.end(), {e[0], e[1]});
+  }
+  find_corners(surface, threshold, out);
   return out;
 }
 

@@ -28,10 +28,12 @@ struct FeatureEdges {
 };
 
 /// Edges whose two facets' normals differ by >= angle_deg (dihedral deviation from flat), on
-/// a closed 2-manifold surface. angle_deg <= 0 or >= 180 selects no edges. Also marks as
-/// corners the feature-edge end points and junctions, and points where a feature polyline turns by
-/// more than angle_deg.
-FeatureEdges detect_sharp_edges(const SurfaceMesh& surface, double angle_deg);
+/// a closed 2-manifold surface, and the edges `also` lists (point id pairs: e.g. where an
+/// interface between touching bodies meets the outer surface). angle_deg <= 0 or >= 180
+/// selects no edges by angle. Also marks as corners the feature-edge end points and
+/// junctions, and points where a feature polyline turns by more than angle_deg.
+FeatureEdges detect_sharp_edges(const SurfaceMesh& surface, double angle_deg,
+                                const std::vector<std::uint32_t>& also = {});
 
 /// The smallest dihedral angle of the solid at an edge of its outward-oriented surface, in
 /// degrees (90 for a box; a wedge's angle at its sharp edge; over 180 at a re-entrant edge),

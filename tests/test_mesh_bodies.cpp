@@ -5,7 +5,9 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -104,22 +106,92 @@ TEST(MeshBodies, EachBodyIsItsRegionInListOrder) {
   EXPECT_EQ(volume_groups, 2);
 }
 
-// The two boxes share the face x = 1 (separate points and triangles, as separately exported
-// parts are): refused, naming both, at a point of that face.
-TEST(MeshBodies, TouchingBodiesAreRefusedNamingBothAndAPointOnTheSharedFace) {
-  const BodyContactError e = contact_error(two("a", box_surface({0, 0, 0}, {1, 1, 1}), "b", box_surface({1, 0, 0}, {2, 1, 1})));
-  EXPECT_EQ(e.code(), ExitCode::geometry);
-  EXPECT_EQ(e.names()[0], "a");
-  EXPECT_EQ(e.names()[1], "b");
-  EXPECT_EQ(e.bodies()[0], 0u);
-  EXPECT_EQ(e.bodies()[1], 1u);
-  EXPECT_EQ(e.where()[0], 1.0);
-  EXPECT_TRUE(inside(e.where(), {1, 0, 0}, {1, 1, 1}));
-  const std::string what = e.what();
-  EXPECT_NE(what.find("bodies 'a' and 'b' touch or overlap"), std::string::npos) << what;
-  EXPECT_NE(what.find("of a.stl"), std::string::npos) << what;
-  EXPECT_NE(what.find("of b.stl"), std::string::npos) << what;
-  ASSERT_EQ(e.facets().size(), 2u);
+/// The faces between tets of two different regions (vertex ids, sorted, with the two regions),
+/// found by matching the tets' faces: what a conforming interface is made of.
+struct RegionFace {
+  std::array<std::uint32_t, 3> v;
+  std::uint32_t ra, rb;
+};
+std::vector<RegionFace> faces_between_regions(const VolumeMesh& m) {
+  std::vector<std::pair<std::array<std::uint32_t, 3>, std::uint32_t>> f;
+  static constexpr int kF[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  for (std::uint32_t t = 0; t < m.num_tets(); ++t)
+    for (const auto& fi : kF) {
+      std::array<std::uint32_t, 3> k{m.tets[4 * t + fi[0]], m.tets[4 * t + fi[1]], m.tets[4 * t + fi[2]]};
+      std::sort(k.begin(), k.end());
+      f.push_back({k, t});
+    }
+  std::sort(f.begin(), f.end());
+  std::vector<RegionFace> out;
+  for (std::size_t i = 0; i + 1 < f.size(); ++i)
+    if (f[i].first == f[i + 1].first && m.tet_region[f[i].second] != m.tet_region[f[i + 1].second])
+      out.push_back({f[i].first, std::min(m.tet_region[f[i].second], m.tet_region[f[i + 1].second]),
+                     std::max(m.tet_region[f[i].second], m.tet_region[f[i + 1].second])});
+  return out;
+}
+
+double area(const VolumeMesh& m, const std::array<std::uint32_t, 3>& v) {
+  const double *a = m.nodes.points.p(v[0]), *b = m.nodes.points.p(v[1]), *c = m.nodes.points.p(v[2]);
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  return std::hypot(u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]) / 2;
+}
+
+// Regression (issue 21): two boxes sharing the face x = 1 (separate points and triangles, as
+// separately exported parts are) were refused; now one mesh, each box its region, the nodes of
+// x = 1 shared: the faces between the two regions tile exactly the unit square there.
+TEST(MeshBodies, TouchingBoxesAreMeshedWithOneConformingInterface) {
+  MeshParams p = params(0.25);
+  const MeshResult r = mesh_solid(two("a", box_surface({0, 0, 0}, {1, 1, 1}), "b", box_surface({1, 0, 0}, {2, 1, 1})), p);
+  const VolumeMesh& m = r.mesh;
+  std::size_t wrong = 0;
+  for (std::size_t t = 0; t < m.num_tets(); ++t) wrong += m.tet_region[t] != (centroid(m, t)[0] > 1 ? 1u : 0u);
+  EXPECT_EQ(wrong, 0u);
+  const std::vector<RegionFace> ifc = faces_between_regions(m);
+  ASSERT_FALSE(ifc.empty());
+  double sum = 0;
+  for (const RegionFace& f : ifc) {
+    for (std::uint32_t v : f.v) EXPECT_NEAR(m.nodes.points.p(v)[0], 1.0, 1e-12);
+    sum += area(m, f.v);
+  }
+  EXPECT_NEAR(sum, 1.0, 1e-9);
+  ASSERT_EQ(r.report.bodies.size(), 2u);
+  for (const MeshReport::Body& b : r.report.bodies) EXPECT_LE(b.volume_error, 1e-9) << b.name;
+  EXPECT_EQ(r.report.check.interface_faces, ifc.size());
+  EXPECT_EQ(r.report.check.straddling_tets, 0u);
+  EXPECT_GE(r.report.quality.min_dihedral, 12.0);
+}
+
+// A slab lying across two blocks touches each on part of its bottom face; the three surfaces
+// are triangulated independently (their facets do not match): imprinting makes the two
+// interfaces, each half a unit square.
+TEST(MeshBodies, SlabAcrossTwoBlocksTouchesEachOnPartOfItsFace) {
+  std::vector<NamedSurface> b = two("left", box_surface({0, 0, 0}, {1, 1, 1}), "right", box_surface({2, 0, 0}, {3, 1, 1}));
+  b.push_back({"slab", "slab.stl", box_surface({0.5, 0, 1}, {2.5, 1, 1.5})});
+  const MeshResult r = mesh_solid(std::move(b), params(0.25));
+  const VolumeMesh& m = r.mesh;
+  std::size_t wrong = 0;
+  for (std::size_t t = 0; t < m.num_tets(); ++t) {
+    const V3 c = centroid(m, t);
+    wrong += m.tet_region[t] != (c[2] > 1 ? 2u : c[0] < 1.5 ? 0u : 1u);
+  }
+  EXPECT_EQ(wrong, 0u);
+  double sum[2] = {0, 0};
+  for (const RegionFace& f : faces_between_regions(m)) {
+    ASSERT_EQ(f.rb, 2u);
+    for (std::uint32_t v : f.v) EXPECT_NEAR(m.nodes.points.p(v)[2], 1.0, 1e-12);
+    sum[f.ra] += area(m, f.v);
+  }
+  EXPECT_NEAR(sum[0], 0.5, 1e-9);
+  EXPECT_NEAR(sum[1], 0.5, 1e-9);
+  ASSERT_EQ(r.report.bodies.size(), 3u);
+  EXPECT_NEAR(r.report.bodies[2].solid_volume, 1.0, 1e-12);
+  for (const MeshReport::Body& x : r.report.bodies) EXPECT_LE(x.volume_error, 1e-9) << x.name;
+}
+
+// Surfaces that coincide facing the same way: both solids on one side (a copy of a body).
+TEST(MeshBodies, CoincidingBodiesAreRefusedAsOverlapping) {
+  const BodyContactError e = contact_error(two("a", box_surface({0, 0, 0}, {1, 1, 1}), "b", box_surface({0, 0, 0}, {1, 1, 1})));
+  EXPECT_NE(std::string(e.what()).find("overlap"), std::string::npos) << e.what();
 }
 
 // Touching along one edge only (x = 1, y = 1) is contact too: closed facets.

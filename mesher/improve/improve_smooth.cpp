@@ -55,6 +55,7 @@ class VertexStar {
     v_ = v;
     ctx_ = &ctx;
     curved_ = false;
+    if (m.locked(v)) return false;  // on an interface between regions
     const NodeKind kind = m.nodes().kind[v];
     on_surface_ = kind != NodeKind::interior;
     feature_ = kind == NodeKind::edge;
@@ -202,6 +203,7 @@ class VertexStar {
   /// is fixed: while every face keeps its orientation, v stays in the polygon's kernel and the
   /// new fan covers the same polygon as the old one, i.e. the same part of the surface.
   bool acceptable(const double* x) const {
+    if (m_->locked(v_)) return false;  // on an interface between regions
     for (std::size_t j = 0; j < st_.size(); ++j) {
       const StarTet& s = st_[j];
       const double* p[4] = {s.p[0], s.p[1], s.p[2], s.p[3]};

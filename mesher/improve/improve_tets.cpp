@@ -102,6 +102,14 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
     if (overfull[k])
       throw CheckError("improve_mesh: a face at node " + std::to_string(k) +
                        " is shared by more than two tets");
+  // Interfaces between regions (touching bodies) are kept as they are: their nodes are locked.
+  locked_.assign(np, 0);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t r = ta_[4 * t + i];
+      if (r == kImproveNone || region_[r >> 2] == region_[t]) continue;
+      for (int j = 0; j < 3; ++j) locked_[tv_[4 * t + std::size_t(kTetFace[i][j])]] = 1;
+    }
 }
 
 std::uint32_t ImproveTets::new_slot() {
@@ -133,7 +141,10 @@ bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
     std::fill(mark_.begin(), mark_.end(), 0);
     mark_stamp_ = 1;
   }
-  for (std::uint32_t t : old) mark_[t] = mark_stamp_;
+  for (std::uint32_t t : old) {
+    mark_[t] = mark_stamp_;
+    if (region_[t] != region_[old[0]]) return false;  // the cavity would cross an interface
+  }
   // Entries: the cavity's outer faces (source = the face reference across, or kImproveNone
   // for a boundary face; tag 0) and the new tets' faces (source = 4*k+i; tag 1).
   struct Entry {
@@ -215,17 +226,23 @@ bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
 std::uint32_t ImproveTets::add_interior_node(const double* p, float h) {
   nodes_->push_back(p, NodeKind::interior, kNoFacet, h);
   vtet_.push_back(kImproveNone);
+  locked_.push_back(0);
   return std::uint32_t(nodes_->size_count() - 1);
 }
 
 std::uint32_t ImproveTets::add_boundary_node(const double* p, NodeKind kind, std::uint32_t facet, float h) {
   nodes_->push_back(p, kind, facet, h);
   vtet_.push_back(kImproveNone);
+  locked_.push_back(0);
   return std::uint32_t(nodes_->size_count() - 1);
 }
 
 bool ImproveTets::remove(std::uint32_t t, std::uint32_t may_orphan) {
   const std::uint32_t* tv = &tv_[4 * std::size_t(t)];
+  for (int i = 0; i < 4; ++i) {  // a face on an interface stays one
+    const std::uint32_t r = ta_[4 * std::size_t(t) + i];
+    if (r != kImproveNone && region_[r >> 2] != region_[t]) return false;
+  }
   // Each vertex w of t needs a neighbour tet (across a face of t holding w) to stand for it.
   std::uint32_t stand_in[4];
   for (int i = 0; i < 4; ++i) {

@@ -43,6 +43,9 @@ class ImproveTets {
   const std::uint32_t* v(std::uint32_t t) const { return &tv_[4 * std::size_t(t)]; }
   std::uint32_t adj(std::uint32_t t, int i) const { return ta_[4 * std::size_t(t) + i]; }
   std::uint32_t region(std::uint32_t t) const { return region_[t]; }
+  /// Vertex v lies on a face between two regions (an interface of touching bodies): it does not
+  /// move. (replace() and remove() refuse to change such faces: every cavity is in one region.)
+  bool locked(std::uint32_t v) const { return locked_[v] != 0; }
   /// A live tet incident to vertex v (kImproveNone if v is in no tet).
   std::uint32_t vertex_tet(std::uint32_t v) const { return vtet_[v]; }
   /// Bumped whenever the slot is (re)used: lets queues drop stale entries.
@@ -151,6 +154,7 @@ class ImproveTets {
 
   NodeSet* nodes_;
   std::vector<std::uint32_t> tv_, ta_, region_, version_, vtet_, free_;
+  std::vector<std::uint8_t> locked_;  // per vertex: on an interface
   // Scratch of replace().
   std::vector<std::uint32_t> mark_;
   std::vector<std::uint8_t> inside_known_;  // per slot: centroid certified strictly inside

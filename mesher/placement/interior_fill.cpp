@@ -330,7 +330,10 @@ InteriorFillStats fill_interior(const SurfaceMesh& surface, const double* lo, co
     const double s[3] = {nodes.points.p(std::uint32_t(i))[0], nodes.points.p(std::uint32_t(i))[1],
                          nodes.points.p(std::uint32_t(i))[2]};  // a copy: push_back reallocates
     const double hs = nodes.size[i];
-    for (int k = 0; k < options.layer_tries; ++k) {
+    const int sides = nodes.facet[i] >= options.two_sided_from ? 2 : 1;
+    for (int k = 0; k < sides * options.layer_tries; ++k) {
+      if (k == options.layer_tries)
+        for (double& x : n) x = -x;  // the other side of an interface
       const double depth = hs * (options.clearance + options.layer_depth * rng.uniform());
       const double ang = rng.uniform(0, 6.283185307179586);
       const double rad = hs * 0.6 * std::sqrt(rng.uniform());

@@ -47,6 +47,9 @@ struct InteriorFillOptions {
   /// the origin of coordinates.
   bool rotate_lattice = true;
   std::uint64_t seed = 1;  ///< for the boundary layer
+  /// Surface nodes on facets with this id or above propose boundary-layer points on both sides
+  /// of their facet (the interfaces between touching bodies, mesher/placement/node_placement.cpp).
+  std::uint32_t two_sided_from = kNoFacet;
   /// Threads for candidate generation (the result does not depend on it).
   unsigned threads = 2;
 };

@@ -90,7 +90,32 @@ NodeSet place_nodes(const Domain& domain, const FeatureEdges& features,
   io.beta = kInteriorBeta;
   io.clearance = options.interior_clearance;
   io.seed = options.seed;
-  fill_interior(mesh, lo, hi, query, sizing, io, grid, nodes, [&](double f) { progress("interior", f); });
+  const BodyInterfaces& ifc = surface.interfaces;
+  if (ifc.empty()) {
+    fill_interior(mesh, lo, hi, query, sizing, io, grid, nodes, [&](double f) { progress("interior", f); });
+    return nodes;
+  }
+  // Touching bodies: the interfaces are sampled like the surface (after it, so their rims reuse
+  // the outer surface's feature nodes), and the interior keeps clear of them too. The fill
+  // sees one surface: the outer facets, then each interface facet in both orientations (the
+  // pair leaves the ray parity of the union unchanged), ids n_outer + f and n_outer + n_ifc + f.
+  const std::size_t n_outer = mesh.num_tris(), n_ifc = ifc.mesh.num_tris(), first = nodes.size_count();
+  place_surface_nodes(ifc.mesh, sizing, so, grid, nodes, [&](double f) { progress("interfaces", f); }, &feature_balls);
+  SurfaceMesh all = mesh;
+  const std::uint32_t off = std::uint32_t(all.points.size());
+  all.points.xyz.insert(all.points.xyz.end(), ifc.mesh.points.xyz.begin(), ifc.mesh.points.xyz.end());
+  for (int side = 0; side < 2; ++side)
+    for (std::size_t f = 0; f < n_ifc; ++f) {
+      const std::uint32_t* t = ifc.mesh.tri(f);
+      all.tris.insert(all.tris.end(), {t[0] + off, side ? t[2] + off : t[1] + off, side ? t[1] + off : t[2] + off});
+    }
+  for (std::size_t i = first; i < nodes.size_count(); ++i) nodes.facet[i] += std::uint32_t(n_outer);
+  const SurfaceQuery all_query(all);
+  io.two_sided_from = std::uint32_t(n_outer);
+  fill_interior(all, lo, hi, all_query, sizing, io, grid, nodes, [&](double f) { progress("interior", f); });
+  // Interface nodes name no facet of the outer surface.
+  for (std::size_t i = first; i < nodes.size_count(); ++i)
+    if (nodes.kind[i] != NodeKind::interior) nodes.facet[i] = kNoFacet;
   return nodes;
 }
 

@@ -43,8 +43,10 @@ bool same_cycle(const std::array<std::uint32_t, 3>& a, const std::array<std::uin
 
 bool MeshCheck::only_sizing_failures() const {
   return !failures.empty() && nonpositive_tets == 0 && flat_tets == 0 && outside_tets == 0 &&
-         offsurface_vertices == 0 && open_edges == 0 && nonmanifold_vertices == 0 &&
-         failures.size() == std::size_t(offsurface_faces > 0) + std::size_t(volume_off);
+         offsurface_vertices == 0 && open_edges == 0 && nonmanifold_vertices == 0 && straddling_tets == 0 &&
+         offinterface_vertices == 0 &&
+         failures.size() == std::size_t(offsurface_faces > 0) + std::size_t(offinterface_faces > 0) +
+                                std::size_t(volume_off);
 }
 
 MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
@@ -72,7 +74,8 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
   }
 
   // ---- per tet: exact orientation, centroid inside, volume ----
-  std::vector<std::uint8_t> bad_orient(nt, 0), outside(nt, 0);
+  std::vector<std::uint8_t> bad_orient(nt, 0), outside(nt, 0), straddles(nt, 0);
+  const RegionQuery* rq = domain.regions;
   const bool regions = mesh.tet_region.size() == nt;
   const std::size_t nr =
       regions && nt ? std::size_t(*std::max_element(mesh.tet_region.begin(), mesh.tet_region.end())) + 1 : 1;
@@ -88,6 +91,7 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
       double m[3];
       for (int k = 0; k < 3; ++k) m[k] = (a[k] + bb[k] + cc[k] + d[k]) / 4;
       if (query.side(m) != 1) outside[t] = 1;
+      else if (rq && mesh.tet_region.size() == nt && rq->region(m) != int(mesh.tet_region[t])) straddles[t] = 1;
       const double u[3] = {bb[0] - a[0], bb[1] - a[1], bb[2] - a[2]};
       const double x[3] = {cc[0] - a[0], cc[1] - a[1], cc[2] - a[2]};
       const double y[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
@@ -121,6 +125,13 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
       c.failures.push_back(std::to_string(c.flat_tets) + " tet(s) of zero volume at rounding level (volume-length ratio < 1e-9), e.g. tet" + f.str());
     if (c.outside_tets)
       c.failures.push_back(std::to_string(c.outside_tets) + " tet(s) with the centroid not strictly inside the solid, e.g. tet" + s.str());
+    std::ostringstream x;
+    for (std::size_t t = 0; t < nt; ++t)
+      if (straddles[t] && c.straddling_tets++ < kShow) x << " " << t << " (region " << mesh.tet_region[t] << ")";
+    if (c.straddling_tets)
+      c.failures.push_back(std::to_string(c.straddling_tets) +
+                           " tet(s) whose centroid lies in another body than their region's (across an interface), e.g. tet" +
+                           x.str());
   }
 
   // ---- faces by matching: once = boundary, twice = interior (must be opposite), more = error ----
@@ -136,6 +147,7 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
     }
   std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.key < b.key; });
   std::vector<std::array<std::uint32_t, 3>> bnd;  // outward
+  std::vector<std::array<std::uint32_t, 3>> ifc;  // between two regions
   std::size_t overfull = 0, same_side = 0;
   std::ostringstream over_ex, same_ex;
   for (std::size_t i = 0; i < faces.size();) {
@@ -144,6 +156,8 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
     if (j - i == 1) {
       bnd.push_back(faces[i].out);
     } else if (j - i == 2) {
+      if (rq && mesh.tet_region.size() == nt && mesh.tet_region[faces[i].tet] != mesh.tet_region[faces[i + 1].tet])
+        ifc.push_back(faces[i].out);
       if (same_cycle(faces[i].out, faces[i + 1].out) && same_side++ < kShow)
         same_ex << " tets " << faces[i].tet << "/" << faces[i + 1].tet;
     } else if (overfull++ < kShow) {
@@ -315,6 +329,54 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
     }
     if (c.nonmanifold_vertices)
       c.failures.push_back(std::to_string(c.nonmanifold_vertices) + " non-manifold boundary vertex(es), e.g." + vex.str());
+  }
+
+  // ---- interfaces: their vertices on them, their faces within tolerance (7 samples) ----
+  c.interface_faces = ifc.size();
+  std::vector<double> idist(ifc.size());
+  if (rq && !ifc.empty()) {
+    std::vector<std::uint32_t> iverts;
+    for (auto& f : ifc) iverts.insert(iverts.end(), f.begin(), f.end());
+    std::sort(iverts.begin(), iverts.end());
+    iverts.erase(std::unique(iverts.begin(), iverts.end()), iverts.end());
+    std::ostringstream vx;
+    for (std::uint32_t v : iverts) {
+      const double d = rq->interfaces().distance(pts.p(v));
+      if (d > on_surface && c.offinterface_vertices++ < kShow)
+        vx << " " << v << " at " << xyz(pts.p(v)) << " (distance " << d << ")";
+    }
+    if (c.offinterface_vertices)
+      c.failures.push_back(std::to_string(c.offinterface_vertices) +
+                           " interface vertex(es) off the interfaces (> 1e-9 x bbox diagonal), e.g." + vx.str());
+    parallel_for(ifc.size(), [&](std::size_t b, std::size_t e, unsigned) {
+      static constexpr double kBary[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0.5, 0}, {0, 0.5, 0.5},
+                                             {0.5, 0, 0.5}, {2.0 / 3, 1.0 / 6, 1.0 / 6},
+                                             {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
+      for (std::size_t k = b; k < e; ++k) {
+        const double *p0 = pts.p(ifc[k][0]), *p1 = pts.p(ifc[k][1]), *p2 = pts.p(ifc[k][2]);
+        double worst = 0, cen[3];
+        for (int q = 0; q < 3; ++q) cen[q] = (p0[q] + p1[q] + p2[q]) / 3;
+        for (auto& w : kBary) {
+          double s[3];
+          for (int q = 0; q < 3; ++q) s[q] = w[0] * p0[q] + w[1] * p1[q] + w[2] * p2[q];
+          worst = std::max(worst, rq->interfaces().distance(s));
+        }
+        idist[k] = worst / sizing(cen);
+      }
+    }, 256);
+    std::ostringstream ex;
+    for (std::size_t k = 0; k < ifc.size(); ++k) {
+      c.max_interface_hausdorff = std::max(c.max_interface_hausdorff, idist[k]);
+      if (idist[k] > options.hausdorff_tolerance) {
+        double cen[3];
+        for (int q = 0; q < 3; ++q) cen[q] = (pts.p(ifc[k][0])[q] + pts.p(ifc[k][1])[q] + pts.p(ifc[k][2])[q]) / 3;
+        c.refine_at.insert(c.refine_at.end(), cen, cen + 3);
+        if (c.offinterface_faces++ < kShow) ex << " face at " << xyz(cen) << " (" << idist[k] << " h)";
+      }
+    }
+    if (c.offinterface_faces)
+      c.failures.push_back(std::to_string(c.offinterface_faces) + " interface face(s) farther than " +
+                           std::to_string(options.hausdorff_tolerance) + " h from the interfaces, e.g." + ex.str());
   }
 
   // ---- volume ----

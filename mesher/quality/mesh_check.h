@@ -25,6 +25,12 @@ struct MeshCheck {
   /// The mesh's volume per region (index: VolumeMesh::tet_region id; one entry when the mesh
   /// has no regions), summed in the same pass as mesh_volume.
   std::vector<double> region_volume;
+  /// Touching bodies (domain.regions): faces between two regions, tets whose centroid lies
+  /// in another body than their region's (straddling an interface), interface-face vertices
+  /// off the interfaces (> 1e-9 x bbox diagonal) and interface faces beyond the Hausdorff
+  /// tolerance from them.
+  std::size_t interface_faces = 0, straddling_tets = 0, offinterface_vertices = 0, offinterface_faces = 0;
+  double max_interface_hausdorff = 0;    ///< max over interface faces of (distance / local h)
   double volume_error = 0;               ///< |mesh - solid| / solid
   bool volume_off = false;               ///< volume_error beyond the tolerance
   std::vector<std::string> failures;     ///< one line per failed property, naming examples

@@ -10,12 +10,16 @@
 #include <CGAL/Box_intersection_d/Box_with_info_d.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/corefinement.h>
+#include <CGAL/Surface_mesh.h>
 #include <CGAL/box_intersection_d.h>
 #include <CGAL/intersections.h>
 
 #include <algorithm>
 #include <cstdint>
 #include <limits>
+#include <map>
+#include <memory>
 #include <set>
 #include <sstream>
 #include <string>
@@ -23,6 +27,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "mesher/surface/surface_query.h"
 
 namespace kdmesh {
 
@@ -73,9 +78,10 @@ std::array<double, 3> contact_point(const SurfaceMesh& m, std::uint32_t f, std::
   return {CGAL::to_double(c.x()), CGAL::to_double(c.y()), CGAL::to_double(c.z())};
 }
 
-/// The lexicographically first pair of facets of two different bodies that intersect, or
-/// {kNoFacet, kNoFacet}: independent of the order box_self_intersection_d reports pairs in.
-std::pair<std::uint32_t, std::uint32_t> first_contact(const SurfaceMesh& m, const Ranges& r) {
+/// For each pair of bodies whose closed facets intersect (touch or cross), the lexicographically
+/// first such pair of facets: independent of the order box_self_intersection_d reports pairs in.
+std::map<std::pair<std::uint32_t, std::uint32_t>, std::pair<std::uint32_t, std::uint32_t>> contacts(
+    const SurfaceMesh& m, const Ranges& r) {
   std::vector<Box> boxes;
   boxes.reserve(m.num_tris());
   auto P = [&](std::uint32_t v) {
@@ -86,18 +92,234 @@ std::pair<std::uint32_t, std::uint32_t> first_contact(const SurfaceMesh& m, cons
     const std::uint32_t* v = m.tri(f);
     boxes.emplace_back(P(v[0]).bbox() + P(v[1]).bbox() + P(v[2]).bbox(), f);
   }
-  std::pair<std::uint32_t, std::uint32_t> best{kNoFacet, kNoFacet};
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::pair<std::uint32_t, std::uint32_t>> found;
   CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), [&](const Box& a, const Box& b) {
     std::uint32_t f = a.info(), g = b.info();
     if (r.body(f) == r.body(g)) return;
     if (g < f) std::swap(f, g);
-    if (std::make_pair(f, g) >= best) return;
+    const std::pair<std::uint32_t, std::uint32_t> bodies{r.body(f), r.body(g)};
+    auto it = found.find(bodies);
+    if (it != found.end() && std::make_pair(f, g) >= it->second) return;
     const std::uint32_t* u = m.tri(f);
     const std::uint32_t* w = m.tri(g);
     if (CGAL::do_intersect(K::Triangle_3(P(u[0]), P(u[1]), P(u[2])), K::Triangle_3(P(w[0]), P(w[1]), P(w[2]))))
-      best = {f, g};
+      found[bodies] = {f, g};
   });
-  return best;
+  return found;
+}
+
+/// A body whose surface lies apart from another's but inside its material (not in a void):
+/// one vertex decides, exactly (ray parity). Throws BodyContactError.
+void check_not_nested(const std::vector<PreparedSurface>& parts, const std::vector<SurfaceQuery*>& query,
+                      std::uint32_t a, std::uint32_t b, const std::vector<std::string>& names,
+                      const std::vector<std::string>& inputs) {
+  for (const auto& [in, out] : {std::pair{b, a}, std::pair{a, b}}) {
+    const SurfaceMesh& m = parts[in].mesh;
+    if (m.num_tris() == 0) continue;
+    const double* q = m.points.p(m.tri(0)[0]);
+    if (query[out]->side(q) <= 0) continue;
+    const std::array<double, 3> at{q[0], q[1], q[2]};
+    throw BodyContactError("bodies '" + names[out] + "' and '" + names[in] + "' overlap: '" + names[in] +
+                               "' lies inside the material of '" + names[out] + "' (e.g. its point " + coords(at) +
+                               ", a corner of facet 0 of " + inputs[in] + "); the bodies of a job must not overlap",
+                           {}, {out, in}, {names[out], names[in]}, at);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Touching bodies: imprinting and the interfaces.
+using Mesh = CGAL::Surface_mesh<K::Point_3>;
+namespace PMP = CGAL::Polygon_mesh_processing;
+
+Mesh to_cgal(const SurfaceMesh& s) {
+  Mesh m;
+  std::vector<Mesh::Vertex_index> v(s.points.size());
+  for (std::uint32_t i = 0; i < s.points.size(); ++i) {
+    const double* p = s.points.p(i);
+    v[i] = m.add_vertex(K::Point_3(p[0], p[1], p[2]));
+  }
+  for (std::size_t f = 0; f < s.num_tris(); ++f) m.add_face(v[s.tri(f)[0]], v[s.tri(f)[1]], v[s.tri(f)[2]]);
+  return m;
+}
+
+/// The facets of a CGAL mesh as point triples, in face order.
+std::vector<std::array<K::Point_3, 3>> triangles(const Mesh& m) {
+  std::vector<std::array<K::Point_3, 3>> t;
+  t.reserve(m.number_of_faces());
+  for (Mesh::Face_index f : m.faces()) {
+    std::array<K::Point_3, 3> x;
+    int k = 0;
+    for (Mesh::Vertex_index v : CGAL::vertices_around_face(m.halfedge(f), m)) x[std::size_t(k++)] = m.point(v);
+    t.push_back(x);
+  }
+  return t;
+}
+
+/// Exactly: triangle u lies in triangle w's plane and its centroid in w (closed).
+bool lies_on(const std::array<K::Point_3, 3>& u, const std::array<K::Point_3, 3>& w) {
+  for (const K::Point_3& p : u)
+    if (CGAL::orientation(w[0], w[1], w[2], p) != CGAL::COPLANAR) return false;
+  auto E = [](const K::Point_3& p) { return EK::Point_3(p.x(), p.y(), p.z()); };
+  const EK::Point_3 c = CGAL::centroid(E(u[0]), E(u[1]), E(u[2]));
+  return EK::Triangle_3(E(w[0]), E(w[1]), E(w[2])).has_on(c);
+}
+
+bool same_facing(const std::array<K::Point_3, 3>& u, const std::array<K::Point_3, 3>& w) {
+  const K::Vector_3 nu = CGAL::cross_product(u[1] - u[0], u[2] - u[0]);
+  const K::Vector_3 nw = CGAL::cross_product(w[1] - w[0], w[2] - w[0]);
+  return nu * nw > 0;
+}
+
+/// Two bodies whose surfaces meet, and a point where they do.
+struct Contact {
+  std::uint32_t a, b;
+  std::array<double, 3> at;
+};
+
+struct Touching {
+  std::vector<Mesh> mesh;                                  ///< imprinted, per body
+  std::vector<std::vector<std::array<K::Point_3, 3>>> tri; ///< their facets
+  std::vector<std::vector<std::uint32_t>> on;              ///< per facet: the body it lies on, or kNoFacet
+};
+
+/// Marks the facets of bodies a and b that lie on the other's surface; facets of the two on
+/// each other facing the same way (both solids on one side) are an overlap.
+void mark_interface(Touching& t, std::uint32_t a, std::uint32_t b, const std::vector<std::string>& names) {
+  std::vector<Box> ba, bb;
+  for (std::uint32_t f = 0; f < t.tri[a].size(); ++f)
+    ba.emplace_back(t.tri[a][f][0].bbox() + t.tri[a][f][1].bbox() + t.tri[a][f][2].bbox(), f);
+  for (std::uint32_t g = 0; g < t.tri[b].size(); ++g)
+    bb.emplace_back(t.tri[b][g][0].bbox() + t.tri[b][g][1].bbox() + t.tri[b][g][2].bbox(), g);
+  std::pair<std::uint32_t, std::uint32_t> overlap{kNoFacet, kNoFacet};
+  CGAL::box_intersection_d(ba.begin(), ba.end(), bb.begin(), bb.end(), [&](const Box& x, const Box& y) {
+    const std::uint32_t f = x.info(), g = y.info();
+    const auto &u = t.tri[a][f], &w = t.tri[b][g];
+    const bool f_on = lies_on(u, w), g_on = lies_on(w, u);
+    if (!f_on && !g_on) return;
+    if (same_facing(u, w)) {
+      overlap = std::min(overlap, std::make_pair(f, g));
+      return;
+    }
+    if (f_on) t.on[a][f] = b;
+    if (g_on) t.on[b][g] = a;
+  });
+  if (overlap.first != kNoFacet) {
+    const K::Point_3 c = CGAL::centroid(t.tri[a][overlap.first][0], t.tri[a][overlap.first][1], t.tri[a][overlap.first][2]);
+    const std::array<double, 3> at{c.x(), c.y(), c.z()};
+    throw BodyContactError("bodies '" + names[a] + "' and '" + names[b] + "' overlap: their surfaces coincide at " +
+                               coords(at) + " facing the same way (both solids on one side)",
+                           {}, {a, b}, {names[a], names[b]}, at);
+  }
+}
+
+/// Bodies that touch: each pair in contact is imprinted with the other (CGAL PMP corefinement),
+/// until nothing changes; facets of one on the other's surface are the interface between the
+/// two (kept once, from the body with the lower id); the others make the outer surface of the
+/// union. A facet of one inside the other's material is an overlap (BodyContactError), and so
+/// is a contact without a shared face (along an edge or at a point only).
+PreparedSurface join_touching(std::vector<PreparedSurface> parts, const std::vector<std::string>& names,
+                              const std::vector<std::string>& inputs,
+                              const std::vector<Contact>& pairs, const std::vector<SurfaceQuery*>& query) {
+  const std::uint32_t nb = std::uint32_t(parts.size());
+  Touching t;
+  for (const PreparedSurface& p : parts) t.mesh.push_back(to_cgal(p.mesh));
+  for (int pass = 0;; ++pass) {
+    bool changed = false;
+    for (const auto& [a, b, at] : pairs) {
+      const std::size_t before = t.mesh[a].number_of_faces() + t.mesh[b].number_of_faces();
+      try {
+        PMP::corefine(t.mesh[a], t.mesh[b]);
+      } catch (const std::exception& e) {
+        throw GeometryError("bodies '" + names[a] + "' and '" + names[b] + "': imprinting their contact failed (" +
+                            e.what() + ")");
+      }
+      changed = changed || t.mesh[a].number_of_faces() + t.mesh[b].number_of_faces() != before;
+    }
+    if (!changed) break;
+    if (pass == 8) throw GeometryError("imprinting the touching bodies did not settle after 8 passes");
+  }
+  for (const Mesh& m : t.mesh) {
+    t.tri.push_back(triangles(m));
+    t.on.emplace_back(t.tri.back().size(), kNoFacet);
+  }
+  for (const auto& [a, b, at] : pairs) mark_interface(t, a, b, names);
+  // Facets off the other bodies' surfaces must lie outside their material.
+  for (std::uint32_t a = 0; a < nb; ++a)
+    for (std::uint32_t f = 0; f < t.tri[a].size(); ++f) {
+      if (t.on[a][f] != kNoFacet) continue;
+      const K::Point_3 c = CGAL::centroid(t.tri[a][f][0], t.tri[a][f][1], t.tri[a][f][2]);
+      const double q[3] = {c.x(), c.y(), c.z()};
+      for (const auto& [x, y, at] : pairs) {
+        if (x != a && y != a) continue;
+        const std::uint32_t b = x == a ? y : x;
+        if (query[b]->side(q) <= 0) continue;
+        const std::array<double, 3> where{q[0], q[1], q[2]};
+        throw BodyContactError("bodies '" + names[a] + "' and '" + names[b] + "' overlap: part of the surface of '" +
+                                   names[a] + "' (" + inputs[a] + ") lies inside the material of '" + names[b] +
+                                   "' (e.g. at " + coords(where) + "; the surfaces cross at " + coords(at) +
+                                   "); the bodies of a job may touch but not overlap",
+                               {}, {a, b}, {names[a], names[b]}, at);
+      }
+    }
+  for (const auto& [a, b, at] : pairs) {
+    double area_a = 0, area_b = 0;
+    for (std::uint32_t f = 0; f < t.tri[a].size(); ++f)
+      if (t.on[a][f] == b) area_a += std::sqrt(K::Triangle_3(t.tri[a][f][0], t.tri[a][f][1], t.tri[a][f][2]).squared_area());
+    for (std::uint32_t g = 0; g < t.tri[b].size(); ++g)
+      if (t.on[b][g] == a) area_b += std::sqrt(K::Triangle_3(t.tri[b][g][0], t.tri[b][g][1], t.tri[b][g][2]).squared_area());
+    if (area_a == 0 && area_b == 0) {
+      throw BodyContactError("bodies '" + names[a] + "' and '" + names[b] + "' touch at " + coords(at) +
+                                 " only along an edge or at a point, with no face in common: such a contact "
+                                 "cannot be meshed (move them apart or let them share a face)",
+                             {}, {a, b}, {names[a], names[b]}, at);
+    }
+    if (!(std::abs(area_a - area_b) <= 1e-9 * std::max(area_a, area_b)))
+      throw GeometryError("bodies '" + names[a] + "' and '" + names[b] + "': their interface has area " +
+                          std::to_string(area_a) + " on one and " + std::to_string(area_b) +
+                          " on the other after imprinting (internal error)");
+  }
+
+  // The outer surface and the interfaces, points welded by exact coordinates.
+  SurfaceMesh outer;
+  BodyInterfaces ifc;
+  std::vector<std::uint32_t> outer_body;  // per outer facet
+  std::map<std::array<double, 3>, std::uint32_t> outer_id, ifc_id;
+  auto id_of = [](std::map<std::array<double, 3>, std::uint32_t>& ids, PointSet& pts, const K::Point_3& p) {
+    const std::array<double, 3> x{p.x(), p.y(), p.z()};
+    auto [it, fresh] = ids.emplace(x, std::uint32_t(pts.size()));
+    if (fresh) pts.push_back(x[0], x[1], x[2]);
+    return it->second;
+  };
+  for (std::uint32_t a = 0; a < nb; ++a)
+    for (std::uint32_t f = 0; f < t.tri[a].size(); ++f) {
+      const std::uint32_t b = t.on[a][f];
+      if (b == kNoFacet) {
+        for (const K::Point_3& p : t.tri[a][f]) outer.tris.push_back(id_of(outer_id, outer.points, p));
+        outer_body.push_back(a);
+      } else if (a < b) {
+        for (const K::Point_3& p : t.tri[a][f]) ifc.mesh.tris.push_back(id_of(ifc_id, ifc.mesh.points, p));
+        ifc.bodies.push_back({a, b});
+      }
+    }
+  SurfaceOptions so;
+  so.check_self_intersections = false;  // each body was checked; contacts are imprinted
+  PreparedSurface out;
+  try {
+    out = prepare_surface(std::move(outer), "the outer surface of the touching bodies", so);
+  } catch (const SurfaceError& e) {
+    throw SurfaceError(std::string(e.what()) + " (where bodies touch, their union must be a solid bounded by a "
+                       "2-manifold surface)", e.facets(), e.defect());
+  }
+  for (std::uint32_t s = 0; s < out.shell_body.size(); ++s) {
+    std::uint32_t f = 0;
+    while (out.tri_shell[f] != s) ++f;
+    out.shell_body[s] = outer_body[f];
+  }
+  out.num_bodies = nb;
+  out.notices.clear();
+  for (PreparedSurface& p : parts) ifc.body_surfaces.push_back(std::move(p.mesh));
+  out.interfaces = std::move(ifc);
+  return out;
 }
 
 }  // namespace
@@ -131,16 +353,23 @@ PreparedSurface join_bodies(std::vector<PreparedSurface> parts, const std::vecto
     return "facet " + std::to_string(r.local(f)) + " of " + inputs[r.body(f)];
   };
 
-  // Surfaces that meet: touching or crossing.
-  const auto [f, g] = first_contact(joined, r);
-  if (f != kNoFacet) {
-    const std::uint32_t a = r.body(f), b = r.body(g);
-    const std::array<double, 3> at = contact_point(joined, f, g);
-    throw BodyContactError("bodies '" + names[a] + "' and '" + names[b] + "' touch or overlap at " + coords(at) +
-                               " (" + facet_name(f) + " and " + facet_name(g) +
-                               " meet there): the bodies of a job must lie apart; conforming "
-                               "interfaces between touching bodies are not supported yet",
-                           {f, g}, {a, b}, {names[a], names[b]}, at);
+  // Surfaces that meet: touching or crossing. Bodies in contact are imprinted and joined along
+  // their interfaces; bodies apart keep their own surfaces.
+  const auto found = contacts(joined, r);
+  if (!found.empty()) {
+    std::vector<std::unique_ptr<SurfaceQuery>> owned;
+    std::vector<SurfaceQuery*> query;
+    for (const PreparedSurface& p : parts) {
+      owned.push_back(std::make_unique<SurfaceQuery>(p.mesh));
+      query.push_back(owned.back().get());
+    }
+    std::vector<Contact> pairs;
+    for (const auto& [bodies, facets] : found)
+      pairs.push_back({bodies.first, bodies.second, contact_point(joined, facets.first, facets.second)});
+    for (std::uint32_t a = 0; a < parts.size(); ++a)
+      for (std::uint32_t b = a + 1; b < parts.size(); ++b)
+        if (!found.count({a, b})) check_not_nested(parts, query, a, b, names, inputs);
+    return join_touching(std::move(parts), names, inputs, pairs, query);
   }
 
   // Nesting across bodies (the surfaces are apart, so each shell lies wholly inside or outside
@@ -171,6 +400,46 @@ PreparedSurface join_bodies(std::vector<PreparedSurface> parts, const std::vecto
   out.shell_body = std::move(shell_part);
   out.num_bodies = std::uint32_t(parts.size());
   out.notices.clear();  // the parts' own notices were reported when they were prepared
+  return out;
+}
+
+std::vector<std::uint32_t> interface_rim_edges(const PreparedSurface& surface) {
+  const BodyInterfaces& ifc = surface.interfaces;
+  std::vector<std::uint32_t> out;
+  if (ifc.empty()) return out;
+  // Interface edges with other than two facets, or between facets of different body pairs.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> edge_facets;
+  for (std::uint32_t f = 0; f < ifc.mesh.num_tris(); ++f)
+    for (int j = 0; j < 3; ++j) {
+      const std::uint32_t a = ifc.mesh.tri(f)[j], b = ifc.mesh.tri(f)[(j + 1) % 3];
+      edge_facets[{std::min(a, b), std::max(a, b)}].push_back(f);
+    }
+  const SurfaceMesh& m = surface.mesh;
+  std::map<std::array<double, 3>, std::uint32_t> outer_id;
+  for (std::uint32_t i = 0; i < m.points.size(); ++i) {
+    const double* p = m.points.p(i);
+    outer_id.emplace(std::array<double, 3>{p[0], p[1], p[2]}, i);
+  }
+  std::set<std::pair<std::uint32_t, std::uint32_t>> outer_edges;
+  for (std::size_t f = 0; f < m.num_tris(); ++f)
+    for (int j = 0; j < 3; ++j) {
+      const std::uint32_t a = m.tri(f)[j], b = m.tri(f)[(j + 1) % 3];
+      outer_edges.insert({std::min(a, b), std::max(a, b)});
+    }
+  auto outer = [&](std::uint32_t v) {
+    const double* p = ifc.mesh.points.p(v);
+    auto it = outer_id.find({p[0], p[1], p[2]});
+    return it == outer_id.end() ? kNoFacet : it->second;
+  };
+  for (const auto& [e, fs] : edge_facets) {
+    bool rim = fs.size() != 2;
+    for (std::uint32_t f : fs) rim = rim || ifc.bodies[f] != ifc.bodies[fs[0]];
+    if (!rim) continue;
+    const std::uint32_t a = outer(e.first), b = outer(e.second);
+    if (a == kNoFacet || b == kNoFacet || !outer_edges.count({std::min(a, b), std::max(a, b)})) continue;
+    out.push_back(a);
+    out.push_back(b);
+  }
   return out;
 }
 

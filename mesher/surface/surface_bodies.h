@@ -40,14 +40,26 @@ class BodyContactError : public SurfaceError {
 /// Joins the bodies' prepared surfaces (each validated and oriented on its own by
 /// prepare_surface, its messages naming its own file and facets) into one prepared surface
 /// whose bodies are the named ones: body k (its region in the mesh) is all of parts[k]'s
-/// solids, whatever their count; facets, shells and points keep the parts' order. Contact
-/// is decided exactly (no tolerance): closed facets of two bodies that intersect at all
-/// (CGAL's exact predicates, after a box filter) are a BodyContactError naming the first such
-/// pair and a point they share; so is a body whose outer shell lies in another's material
-/// (not in one of its voids). A body inside another's void is apart, and kept.
+/// solids, whatever their count. Contact is decided exactly (no tolerance): closed facets of
+/// two bodies that intersect at all (CGAL's exact predicates, after a box filter).
+///  - Bodies apart: facets, shells and points keep the parts' order. A body whose outer shell
+///    lies in another's material (not in one of its voids) is a BodyContactError.
+///  - Bodies that touch along faces: each pair in contact is imprinted with the other (CGAL
+///    PMP corefinement), so that where they touch both have the same triangles. The result's
+///    mesh is then the outer surface of their union, and its `interfaces` hold the facets
+///    between two bodies (once each) and every body's own surface. A facet of one body inside
+///    another's material, coinciding facets facing the same way (both solids on one side) and
+///    a contact along an edge or at a point only are BodyContactErrors naming both bodies and
+///    a point.
 /// `names` gives the bodies' names (names.size() == parts.size() >= 1). Throws UsageError
 /// for a size mismatch, an empty name or a repeated one.
 PreparedSurface join_bodies(std::vector<PreparedSurface> parts, const std::vector<std::string>& names,
                             const std::vector<std::string>& inputs);
+
+/// The edges of the outer surface (point id pairs of surface.mesh) where an interface meets it
+/// (an interface edge with other than two interface facets, or between interfaces of different
+/// pairs of bodies): the rims of the interfaces, feature edges of the mesh. Empty without
+/// interfaces.
+std::vector<std::uint32_t> interface_rim_edges(const PreparedSurface& surface);
 
 }  // namespace kdmesh

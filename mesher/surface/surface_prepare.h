@@ -1,6 +1,7 @@
 // kdmesh — surface validation and orientation (pipeline stage: SurfaceMesh -> PreparedSurface).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -10,6 +11,19 @@
 #include "core/surface_mesh.h"
 
 namespace kdmesh {
+
+/// The interfaces of an assembly: where named bodies touch along faces (mesher/surface/
+/// surface_bodies.h), the facets between two bodies, inside the solid. Empty for one body and
+/// for bodies that lie apart.
+struct BodyInterfaces {
+  /// One facet per piece of interface (imprinted: the same triangles for both bodies), oriented
+  /// out of bodies[f][0] into bodies[f][1].
+  SurfaceMesh mesh;
+  std::vector<std::array<std::uint32_t, 2>> bodies;  ///< per facet: the body behind, the body in front
+  /// Each body's own closed, outward surface (as prepared, scaled): which body holds a point.
+  std::vector<SurfaceMesh> body_surfaces;
+  bool empty() const { return mesh.num_tris() == 0; }
+};
 
 /// A surface that bounds a solid: closed, 2-manifold, without degenerate triangles or
 /// self-intersections, every facet oriented outward (away from the solid).
@@ -25,6 +39,9 @@ struct PreparedSurface {
   double volume = 0;                        ///< volume of the solid (sum of shell_volume)
   double bbox_min[3] = {0, 0, 0}, bbox_max[3] = {0, 0, 0};
   std::vector<std::string> notices;         ///< what was changed (e.g. "shell 2 flipped ...")
+  /// Touching bodies: `mesh` is then the outer surface of their union, and the interfaces
+  /// between them are here.
+  BodyInterfaces interfaces;
 };
 
 struct SurfaceOptions {

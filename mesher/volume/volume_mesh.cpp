@@ -21,6 +21,7 @@
 #include "core/error.h"
 #include "core/timer.h"
 #include "mesher/volume/boundary_faces.h"
+#include "mesher/volume/interface_faces.h"
 #include "mesher/surface/crease_points.h"
 #include "mesher/parallel_for.h"
 #include "mesher/tet_quality.h"
@@ -481,6 +482,7 @@ VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes, const VolumeMeshOpti
   bool rebuild = false;                    // nodes were dropped: triangulate from scratch
   std::vector<std::uint32_t> pending_ids, pending_hints;  // Steiner points to insert, hints
   std::vector<std::uint8_t> inside;
+  std::vector<std::uint32_t> label;  // touching bodies: the region of each tet (kNoRegion outside)
   BoundaryFaces bf;
   std::size_t folds_peeled = 0;  // all-surface tets taken out of the solid (peel_folds)
   FaceVerdicts verdicts;         // boundary faces judged in earlier rounds (same node ids)
@@ -529,8 +531,16 @@ VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes, const VolumeMeshOpti
       }, 65536, 64);
       for (auto& p : part) flat.insert(flat.end(), p.begin(), p.end());
     }
+    // Touching bodies: each tet's body, and the faces between bodies against the interfaces.
+    InterfaceFaces ifaces;
+    InterfaceJudgement ij;
+    if (domain.regions) {
+      label = label_regions(dr.tri, nodes, domain, inside, &st.side_queries);
+      ifaces = interface_faces(dr.tri, label);
+      ij = judge_interfaces(ifaces, dr.tri, label, nodes, domain, tolerance);
+    }
     const bool good = judge.bad_faces.empty() && judge.bad_edges.empty() &&
-                      judge.bad_vertices.empty() && flat.empty();
+                      judge.bad_vertices.empty() && flat.empty() && ij.bad_faces.empty();
     if (good) {
       st.recover_seconds += sw.seconds();
       break;
@@ -544,22 +554,23 @@ VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes, const VolumeMeshOpti
     std::vector<std::array<double, 3>> fallbacks;   // circumcentres, tried if the first is too close
     std::vector<std::array<std::uint32_t, 3>> cand_facets;  // the face vertices' facets
     std::vector<std::uint32_t> cand_hint;                    // a vertex of the face
+    std::vector<std::uint8_t> cand_interface;                // the point goes on an interface
     auto face_pts = [&](std::uint32_t f, const double*& a, const double*& b, const double*& c) {
       a = nodes.points.p(bf.verts[3 * std::size_t(f)]);
       b = nodes.points.p(bf.verts[3 * std::size_t(f) + 1]);
       c = nodes.points.p(bf.verts[3 * std::size_t(f) + 2]);
     };
-    auto add_face_candidate = [&](std::uint32_t f) {
-      const double *a, *b, *c;
-      face_pts(f, a, b, c);
+    auto add_candidate = [&](const std::uint32_t* fv, bool on_interface) {
+      const double *a = nodes.points.p(fv[0]), *b = nodes.points.p(fv[1]), *c = nodes.points.p(fv[2]);
       candidates.push_back({(a[0] + b[0] + c[0]) / 3, (a[1] + b[1] + c[1]) / 3, (a[2] + b[2] + c[2]) / 3});
       double cc[3];
       if (triangle_circumcentre(a, b, c, cc)) fallbacks.push_back({cc[0], cc[1], cc[2]});
       else fallbacks.push_back(candidates.back());
-      const std::uint32_t* fv = &bf.verts[3 * std::size_t(f)];
       cand_hint.push_back(fv[0]);
       cand_facets.push_back({nodes.facet[fv[0]], nodes.facet[fv[1]], nodes.facet[fv[2]]});
+      cand_interface.push_back(on_interface ? 1 : 0);
     };
+    auto add_face_candidate = [&](std::uint32_t f) { add_candidate(&bf.verts[3 * std::size_t(f)], false); };
     for (std::size_t k = 0; k < judge.bad_faces.size(); ++k) {
       const std::uint32_t f = judge.bad_faces[k];
       bool had_interior = false;
@@ -577,6 +588,16 @@ VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes, const VolumeMeshOpti
         const std::uint32_t v = dr.tri.v(t, j);
         if (nodes.kind[v] == NodeKind::interior && !drop[v]) drop[v] = 1, ++dropped;
       }
+    for (std::uint32_t f : ij.bad_faces) {
+      const std::uint32_t* fv = &ifaces.verts[3 * std::size_t(f)];
+      bool had_interior = false;
+      for (int j = 0; j < 3; ++j)
+        if (nodes.kind[fv[j]] == NodeKind::interior) {
+          had_interior = true;
+          if (!drop[fv[j]]) drop[fv[j]] = 1, ++dropped;
+        }
+      if (!had_interior) add_candidate(fv, true);
+    }
     for (std::uint32_t f : judge.faces_at_bad_edges) add_face_candidate(f);
     for (std::uint32_t f : judge.faces_at_bad_vertices) add_face_candidate(f);
 
@@ -604,7 +625,10 @@ VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes, const VolumeMeshOpti
           double p[3];
           std::uint32_t facet = kNoFacet;
           NodeKind kind = NodeKind::surface;
-          if (attempt == 1) {
+          if (cand_interface[k]) {
+            if (attempt == 1) continue;  // interfaces have no creases here
+            domain.regions->interfaces().closest(attempt == 0 ? candidates[k].data() : fallbacks[k].data(), p);
+          } else if (attempt == 1) {
             if (!creases->closest_crease_point(candidates[k].data(), cand_facets[k].data(), 3, p, &facet))
               continue;
             kind = NodeKind::edge;
@@ -628,7 +652,9 @@ VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes, const VolumeMeshOpti
       msg << "mesh_volume: the boundary could not be recovered after " << round
           << " Steiner round(s)" << (progress_made ? "" : " (no admissible Steiner point left)")
           << " and " << folds_peeled << " folded surface tet(s) taken out"
-          << ": " << judge.bad_faces.size() << " bad boundary face(s), " << judge.bad_edges.size() / 2
+          << ": " << judge.bad_faces.size() << " bad boundary face(s), "
+          << (ij.bad_faces.empty() ? std::string() : std::to_string(ij.bad_faces.size()) + " bad interface face(s), ")
+          << judge.bad_edges.size() / 2
           << " non-manifold edge(s), " << judge.bad_vertices.size() << " non-manifold vertex(es)";
       std::size_t shown = 0;
       for (std::size_t k = 0; k < judge.bad_faces.size() && shown < 5; ++k, ++shown) {
@@ -637,6 +663,13 @@ VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes, const VolumeMeshOpti
         const double m[3] = {(a[0] + b[0] + c[0]) / 3, (a[1] + b[1] + c[1]) / 3, (a[2] + b[2] + c[2]) / 3};
         msg << (shown ? "; " : "; e.g. ") << "face at " << xyz(m) << " ("
             << judge.reasons[k] << ")";
+      }
+      for (std::size_t k = 0; k < ij.bad_faces.size() && shown < 5; ++k, ++shown) {
+        const std::uint32_t* fv = &ifaces.verts[3 * std::size_t(ij.bad_faces[k])];
+        double m[3];
+        for (int q = 0; q < 3; ++q)
+          m[q] = (nodes.points.p(fv[0])[q] + nodes.points.p(fv[1])[q] + nodes.points.p(fv[2])[q]) / 3;
+        msg << (shown ? "; " : "; e.g. ") << "face at " << xyz(m) << " (" << ij.reasons[k] << ")";
       }
       for (std::size_t k = 0; k + 1 < judge.bad_edges.size() && shown < 5; k += 2, ++shown)
         msg << "; non-manifold edge " << xyz(nodes.points.p(judge.bad_edges[k])) << "-"
@@ -649,6 +682,11 @@ VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes, const VolumeMeshOpti
         face_pts(f, a, b, c);
         for (int k = 0; k < 3; ++k) where.push_back((a[k] + b[k] + c[k]) / 3);
       }
+      for (std::uint32_t f : ij.bad_faces)
+        for (int q = 0; q < 3; ++q)
+          where.push_back((nodes.points.p(ifaces.verts[3 * std::size_t(f)])[q] +
+                           nodes.points.p(ifaces.verts[3 * std::size_t(f) + 1])[q] +
+                           nodes.points.p(ifaces.verts[3 * std::size_t(f) + 2])[q]) / 3);
       for (std::size_t k = 0; k + 1 < judge.bad_edges.size(); k += 2)
         for (int q = 0; q < 3; ++q)
           where.push_back((nodes.points.p(judge.bad_edges[k])[q] + nodes.points.p(judge.bad_edges[k + 1])[q]) / 2);
@@ -687,7 +725,9 @@ VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes, const VolumeMeshOpti
   // pass); each takes the body of the shell of the facet closest to one of its boundary faces.
   // With a single body every tet is in body 0 and the pass is skipped.
   std::vector<std::uint32_t> region_of;  // per tet of tri: body id (empty = all 0)
-  if (surface.num_bodies > 1) {
+  if (domain.regions) {
+    region_of = std::move(label);
+  } else if (surface.num_bodies > 1) {
     std::vector<std::uint32_t> parent(nt);
     std::iota(parent.begin(), parent.end(), 0u);
     auto find = [&](std::uint32_t x) {
@@ -754,6 +794,15 @@ VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes, const VolumeMeshOpti
   {
     std::vector<char> on_boundary(nn, 0);
     for (std::uint32_t v : out.boundary) on_boundary[v] = 1;
+    if (domain.regions)  // nodes on the faces between bodies are on an interface
+      for (std::size_t t = 0; t < nt; ++t) {
+        if (!inside[t]) continue;
+        for (int i = 0; i < 4; ++i) {
+          const std::uint32_t u = tri.adj(t, i) >> 2;
+          if (!inside[u] || region_of[u] == region_of[t]) continue;
+          for (int j = 0; j < 3; ++j) on_boundary[new_id[tri.v(t, kTetFace[i][j])]] = 1;
+        }
+      }
     for (std::uint32_t v = 0; v < nn; ++v)
       if (!on_boundary[v] && out.nodes.kind[v] != NodeKind::interior) {
         out.nodes.kind[v] = NodeKind::interior;

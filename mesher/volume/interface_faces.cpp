@@ -1,0 +1,176 @@
+// kdmesh — regions of touching bodies and the faces between them (mesher/volume/interface_faces.h).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/volume/interface_faces.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.h"
+#include "mesher/parallel_for.h"
+#include "mesher/volume/boundary_faces.h"
+
+namespace kdmesh {
+
+std::vector<std::uint32_t> label_regions(const Triangulation& tri, const NodeSet& nodes, const Domain& domain,
+                                         const std::vector<std::uint8_t>& inside, std::size_t* queries) {
+  if (!domain.regions) throw UsageError("label_regions: the domain has no region queries");
+  const RegionQuery& rq = *domain.regions;
+  const std::size_t n = tri.num_tets(), nn = nodes.size_count();
+  std::vector<std::int32_t> node_region(nn, -1);
+  parallel_for(nn, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t i = b; i < e; ++i)
+      if (nodes.kind[i] == NodeKind::interior) node_region[i] = rq.region(nodes.points.p(std::uint32_t(i)));
+  }, 1024);
+  std::size_t asked = 0;
+  for (std::size_t i = 0; i < nn; ++i) asked += nodes.kind[i] == NodeKind::interior;
+  auto own = [&](std::uint32_t t) {
+    double c[3];
+    for (int k = 0; k < 3; ++k)
+      c[k] = (nodes.points.p(tri.v(t, 0))[k] + nodes.points.p(tri.v(t, 1))[k] + nodes.points.p(tri.v(t, 2))[k] +
+              nodes.points.p(tri.v(t, 3))[k]) / 4;
+    return rq.region(c);
+  };
+  std::vector<std::uint32_t> label(n, kNoRegion);
+  std::vector<std::uint8_t> verified(n, 0);
+  std::vector<std::uint32_t> wave;
+  for (std::size_t t = 0; t < n; ++t) {
+    if (!inside[t]) continue;
+    std::int32_t r = -1;
+    bool mixed = false;
+    for (int i = 0; i < 4; ++i) {
+      const std::int32_t x = node_region[tri.v(t, i)];
+      if (x < 0) continue;
+      mixed = mixed || (r >= 0 && x != r);
+      r = r < 0 ? x : r;
+    }
+    if (r >= 0 && !mixed) label[t] = std::uint32_t(r);
+    else wave.push_back(std::uint32_t(t));
+  }
+  // The first wave: tets without a body yet, then those next to a tet of another body.
+  std::vector<std::int32_t> answer(wave.size());
+  parallel_for(wave.size(), [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t k = b; k < e; ++k) answer[k] = own(wave[k]);
+  }, 256);
+  asked += wave.size();
+  for (std::size_t k = 0; k < wave.size(); ++k) {
+    verified[wave[k]] = 1;
+    // On an interface or outside by rounding: the body of a neighbour decides below.
+    label[wave[k]] = answer[k] >= 0 ? std::uint32_t(answer[k]) : kNoRegion - 1;
+  }
+  wave.clear();
+  for (std::size_t t = 0; t < n; ++t) {
+    if (!inside[t] || verified[t]) continue;
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t u = tri.adj(t, i) >> 2;
+      if (inside[u] && label[u] != label[t]) {
+        wave.push_back(std::uint32_t(t));
+        break;
+      }
+    }
+  }
+  while (!wave.empty()) {
+    for (std::uint32_t t : wave) verified[t] = 1;
+    answer.assign(wave.size(), 0);
+    parallel_for(wave.size(), [&](std::size_t b, std::size_t e, unsigned) {
+      for (std::size_t k = b; k < e; ++k) answer[k] = own(wave[k]);
+    }, 256);
+    asked += wave.size();
+    std::vector<std::uint32_t> next;
+    for (std::size_t k = 0; k < wave.size(); ++k) {
+      const std::uint32_t t = wave[k];
+      if (answer[k] < 0 || std::uint32_t(answer[k]) == label[t]) continue;
+      label[t] = std::uint32_t(answer[k]);
+      for (int i = 0; i < 4; ++i) {
+        const std::uint32_t u = tri.adj(t, i) >> 2;
+        if (inside[u] && !verified[u]) {
+          verified[u] = 1;
+          next.push_back(u);
+        }
+      }
+    }
+    wave.swap(next);
+  }
+  // Tets whose own centroid lies on a body's surface (flat slivers) take a neighbour's body.
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t t = 0; t < n; ++t) {
+      if (label[t] != kNoRegion - 1) continue;
+      for (int i = 0; i < 4; ++i) {
+        const std::uint32_t u = tri.adj(t, i) >> 2;
+        if (inside[u] && label[u] < kNoRegion - 1) {
+          label[t] = label[u];
+          changed = true;
+          break;
+        }
+      }
+    }
+  }
+  for (std::size_t t = 0; t < n; ++t)
+    if (label[t] == kNoRegion - 1) label[t] = 0;
+  if (queries) *queries += asked;
+  return label;
+}
+
+InterfaceFaces interface_faces(const Triangulation& tri, const std::vector<std::uint32_t>& label) {
+  InterfaceFaces out;
+  const std::size_t n = tri.num_tets();
+  for (std::size_t t = 0; t < n; ++t) {
+    if (label[t] == kNoRegion) continue;
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t u = tri.adj(t, i) >> 2;
+      if (label[u] == kNoRegion || label[u] <= label[t]) continue;
+      for (int j = 0; j < 3; ++j) out.verts.push_back(tri.v(t, kTetFace[i][j]));
+      out.tet.push_back(std::uint32_t(t));
+      out.face.push_back(std::uint8_t(i));
+    }
+  }
+  return out;
+}
+
+std::uint8_t judge_interface_face(const std::uint32_t* fv, std::uint32_t ra, std::uint32_t rb, const NodeSet& nodes,
+                                  const Domain& domain, double tolerance) {
+  std::uint8_t w = 0;
+  for (int j = 0; j < 3; ++j)
+    if (nodes.kind[fv[j]] == NodeKind::interior) w |= kFaceInterior;
+  if (w) return w;
+  const RegionQuery& rq = *domain.regions;
+  const double *p0 = nodes.points.p(fv[0]), *p1 = nodes.points.p(fv[1]), *p2 = nodes.points.p(fv[2]);
+  double c[3], cp[3];
+  for (int k = 0; k < 3; ++k) c[k] = (p0[k] + p1[k] + p2[k]) / 3;
+  std::uint32_t facet = kNoFacet;
+  double dmax = rq.interfaces().closest(c, cp, &facet);
+  const double* ends[3][2] = {{p0, p1}, {p1, p2}, {p2, p0}};
+  for (auto& ed : ends) {
+    const double m[3] = {(ed[0][0] + ed[1][0]) / 2, (ed[0][1] + ed[1][1]) / 2, (ed[0][2] + ed[1][2]) / 2};
+    dmax = std::max(dmax, rq.interfaces().distance(m));
+  }
+  if (dmax > tolerance * domain.sizing(c)) w |= kFaceFar;
+  const std::array<std::uint32_t, 2>& b = rq.bodies(facet);
+  if (!((b[0] == ra && b[1] == rb) || (b[0] == rb && b[1] == ra))) w |= kFaceAgainst;
+  return w;
+}
+
+InterfaceJudgement judge_interfaces(const InterfaceFaces& faces, const Triangulation& tri,
+                                    const std::vector<std::uint32_t>& label, const NodeSet& nodes,
+                                    const Domain& domain, double tolerance) {
+  const std::size_t nf = faces.size();
+  std::vector<std::uint8_t> why(nf, 0);
+  parallel_for(nf, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t f = b; f < e; ++f) {
+      const std::uint32_t t = faces.tet[f];
+      const std::uint32_t u = tri.adj(t, faces.face[f]) >> 2;
+      why[f] = judge_interface_face(&faces.verts[3 * f], label[t], label[u], nodes, domain, tolerance);
+    }
+  }, 256);
+  InterfaceJudgement j;
+  for (std::size_t f = 0; f < nf; ++f) {
+    if (!why[f]) continue;
+    j.bad_faces.push_back(std::uint32_t(f));
+    j.reasons.push_back(why[f] & kFaceInterior ? "interface face with an interior node"
+                        : why[f] & kFaceFar    ? "interface face too far from the interface"
+                                               : "interface face between other bodies");
+  }
+  return j;
+}
+
+}  // namespace kdmesh
