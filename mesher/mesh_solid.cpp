@@ -15,6 +15,7 @@
 
 #include "core/memory_amount.h"
 #include "core/timer.h"
+#include "mesher/fe/body_groups.h"
 #include "mesher/placement/node_placement.h"
 #include "mesher/numeric_ranges.h"
 #include "mesher/surface/surface_prepare.h"
@@ -423,6 +424,7 @@ PreparedSurface prepare(const Job& job, std::vector<NamedSurface> bodies, bool n
   report.counts.surface_facets = surface.mesh.num_tris();
   report.counts.shells = surface.shell_body.size();
   report.counts.bodies = surface.num_bodies;
+  report.counts.interface_facets = surface.interfaces.mesh.num_tris();
   report.solid_volume = surface.volume;
   for (int k = 0; k < 3; ++k) report.bbox_min[k] = surface.bbox_min[k], report.bbox_max[k] = surface.bbox_max[k];
   report.has_surface = true;
@@ -531,6 +533,8 @@ FeMesh fe_groups(const Job& job, const PreparedSurface& surface, const SurfaceQu
   for (const MeshReport::Body& b : report.bodies) go.body_names.push_back(b.name);
   FeMesh fe = make_fe_mesh(mesh, bg, make_groups(params.groups, surface.mesh, patches, params.sizing.zones,
                                                  surface.num_bodies, go));
+  if (!go.body_names.empty())  // named bodies: their exteriors and interfaces
+    add_body_groups(fe, mesh, std::uint32_t(patches.num_patches), go.body_names);
   if (params.element_order == 2) {
     job.log("quadratic elements");
     report.quadratic = make_quadratic(fe, surface.mesh, query, patches);
@@ -580,7 +584,18 @@ MeshResult run(const Job& job, std::vector<NamedSurface> bodies, bool named) {
 
   clock.reset();
   TetMesh tm = to_tet_mesh(m.mesh);
-  report.quality = summarize_quality(tm);
+  if (report.bodies.empty()) {
+    report.quality = summarize_quality(tm);
+  } else {  // and each body's extremes
+    std::vector<TetQuality> per_tet;
+    report.quality = summarize_quality(tm, &per_tet);
+    for (MeshReport::Body& b : report.bodies) b.min_dihedral = 180, b.max_dihedral = 0;
+    for (std::size_t t = 0; t < per_tet.size() && t < m.mesh.tet_region.size(); ++t) {
+      MeshReport::Body& b = report.bodies[m.mesh.tet_region[t]];
+      b.min_dihedral = std::min(b.min_dihedral, per_tet[t].min_dihedral);
+      b.max_dihedral = std::max(b.max_dihedral, per_tet[t].max_dihedral);
+    }
+  }
   report.size_fidelity = measure_size_fidelity(m.mesh.nodes.points, m.mesh.tets, m.sizing);
   report.seconds["quality"] = clock.seconds();
   report.has_quality = true;

@@ -113,6 +113,7 @@ struct BoundaryGroupsSummary {
 struct MeshReport {
   struct Counts {
     std::size_t surface_points = 0, surface_facets = 0, shells = 0, bodies = 0;
+    std::size_t interface_facets = 0;  ///< touching bodies: facets between two (imprinted, once each)
     std::size_t feature_edges = 0, feature_corners = 0, placed_nodes = 0, nodes = 0;
     std::array<std::size_t, 4> nodes_by_kind{};  ///< corner, edge, surface, interior
     std::size_t steiner_points = 0, dropped_nodes = 0, buried_nodes = 0, tets = 0, boundary_faces = 0;
@@ -147,11 +148,13 @@ struct MeshReport {
   std::map<std::string, double> mesh_stages;
   std::vector<std::string> notices;
   /// Named bodies (mesh_solid on a list of them), one per region, in region order: the solid's
-  /// volume, the mesh's volume and tets in that region (filled with the mesh check).
+  /// volume, the mesh's volume and tets in that region (filled with the mesh check), and the
+  /// smallest and largest dihedral angle of its tets (degrees; with the quality figures).
   struct Body {
     std::string name, input;
     double solid_volume = 0, mesh_volume = 0, volume_error = 0;  ///< error: |mesh - solid| / solid
     std::size_t tets = 0;
+    double min_dihedral = 0, max_dihedral = 0;
   };
   std::vector<Body> bodies;
 };

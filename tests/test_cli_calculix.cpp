@@ -193,14 +193,17 @@ struct Solution {
   std::map<std::string, Vec> reactions;   ///< NODE PRINT RF totals per set (upper case)
 };
 
-/// Writes dir/<job>-run.inp (the mesh included, the given material and step body), runs ccx and
-/// reads its .dat.
-Solution solve(const std::string& dir, const std::string& job, const std::string& step) {
+constexpr const char* kSteel =
+    "*MATERIAL, NAME=STEEL\n*ELASTIC\n210000., 0.3\n*DENSITY\n7.85E-9\n"
+    "*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n";
+
+/// Writes dir/<job>-run.inp (the mesh included, the materials and sections, the step body),
+/// runs ccx and reads its .dat.
+Solution solve(const std::string& dir, const std::string& job, const std::string& step,
+               const std::string& materials = kSteel) {
   const std::string run = job + "-run";
   write_text_file(dir + "/" + run + ".inp",
-                  "*INCLUDE, INPUT=" + job + ".inp\n"
-                  "*MATERIAL, NAME=STEEL\n*ELASTIC\n210000., 0.3\n*DENSITY\n7.85E-9\n"
-                  "*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n"
+                  "*INCLUDE, INPUT=" + job + ".inp\n" + materials +
                   "*STEP\n*STATIC\n" + step + "*NODE PRINT, NSET=NALL\nU\n*END STEP\n");
   const auto r = kdmesh::test::run_tool("cd " + dir + " && OMP_NUM_THREADS=1 ccx -i " + run, dir + "/ccx-" + job);
   EXPECT_EQ(r.code, 0) << r.out;
@@ -412,6 +415,68 @@ TEST(CalculixGearbox, ShippedMeshUnderGravityIsInEquilibrium) {
   std::cout << "largest displacement " << max_u << " mm\n";
   EXPECT_GT(max_u, 0);
   EXPECT_LT(max_u, 1e-2);
+}
+
+// ---------------------------------------------------------------------------------------------
+// An assembly (issue 21): a bar of two materials in series, two touching bodies meshed with one
+// conforming interface, each body its ELSET with its own *SOLID SECTION
+// ---------------------------------------------------------------------------------------------
+
+/// The box [lo, hi] as an ASCII STL with outward facets.
+void write_box_stl(const std::string& path, const Vec& lo, const Vec& hi) {
+  static constexpr int kTri[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                                      {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  auto corner = [&](int i) { return Vec{i & 1 ? hi[0] : lo[0], i >> 1 & 1 ? hi[1] : lo[1], i >> 2 & 1 ? hi[2] : lo[2]}; };
+  std::ostringstream o;
+  o.precision(17);
+  o << "solid box\n";
+  for (const auto& t : kTri) {
+    o << "facet normal 0 0 0\nouter loop\n";
+    for (int k : t) o << "vertex " << corner(k)[0] << " " << corner(k)[1] << " " << corner(k)[2] << "\n";
+    o << "endloop\nendfacet\n";
+  }
+  o << "endsolid box\n";
+  write_text_file(path, o.str());
+}
+
+// Steel [0, 100] and aluminium [100, 200] along x, 20 x 20 mm, Poisson's ratio 0 (the exact
+// solution is then uniaxial: sigma = p everywhere, u_x(200) = p (L_s / E_s + L_a / E_a)); the face
+// x = 0 held, the face x = 200 pulled by p. Linear tets represent that field exactly only where
+// every tet lies in one material: a tet across the interface would mix the two moduli.
+TEST(CalculixAssembly, BimaterialBarInSeriesMatchesTheAnalyticEndDisplacement) {
+  KDMESH_NEED_CLIENT(kdmesh::test::have_command("ccx"), "ccx (CalculiX)");
+  const std::string dir = dir_for("bimaterial");
+  write_box_stl(dir + "/steel.stl", {0, 0, 0}, {100, 20, 20});
+  write_box_stl(dir + "/alu.stl", {100, 0, 0}, {200, 20, 20});
+  for (int order : {1, 2}) {
+    const std::string name = "bar" + std::to_string(order);
+    SCOPED_TRACE(name);
+    const nlohmann::json summary = mesh(dir,
+        "jobs:\n  - name: " + name + "\n    bodies: [{name: steel, input: steel.stl}, {name: alu, input: alu.stl}]\n"
+        "    size: 6\n    element_order: " + std::to_string(order) + "\n"
+        "    groups:\n      - {name: held, point: [0, 10, 10]}\n      - {name: pulled, point: [200, 10, 10]}\n"
+        "    output: {summary: " + name + ".json, inp: " + name + ".inp}\n",
+        name);
+    EXPECT_GT(summary["mesh_check"]["interface_faces"].get<long>(), 0);
+    EXPECT_EQ(summary["mesh_check"]["straddling_tets"].get<long>(), 0);
+    const Deck d = read_deck(dir + "/" + name + ".inp");
+    ASSERT_TRUE(d.elsets.count("STEEL") && d.elsets.count("ALU"));
+    EXPECT_EQ(d.elsets.at("STEEL").size() + d.elsets.at("ALU").size(), d.elements.size());
+    ASSERT_TRUE(d.surfaces.count("STEEL-ALU"));  // the interface, a surface of its own
+    constexpr double kP = 10, kEs = 210000, kEa = 70000;
+    const Solution s = solve(dir, name, "*BOUNDARY\nheld, 1, 3\n*DSLOAD\npulled, P, -10.\n",
+                             "*MATERIAL, NAME=STEEL\n*ELASTIC\n210000., 0.\n*MATERIAL, NAME=ALU\n*ELASTIC\n70000., 0.\n"
+                             "*SOLID SECTION, ELSET=steel, MATERIAL=STEEL\n*SOLID SECTION, ELSET=alu, MATERIAL=ALU\n");
+    expect_finite(d, s);
+    const double exact = kP * (100 / kEs + 100 / kEa);
+    double sum = 0;
+    std::size_t n = 0;
+    for (const long node : d.nsets.at("PULLED")) sum += s.u.at(node)[0], ++n;
+    ASSERT_GT(n, 0u);
+    const double mean = sum / double(n);
+    std::cout << name << ": end displacement " << mean << " mm, analytic " << exact << " mm (" << n << " nodes)\n";
+    EXPECT_NEAR(mean, exact, 0.01 * exact);
+  }
 }
 
 }  // namespace

@@ -153,7 +153,9 @@ TEST(CliMesh, SolverFormatsCarryTheBoundaryGroups) {
 // --body NAME=PATH (issue 21): two cubes apart are two regions, named in the summary and as the
 // INP's volume ELSETs; two touching cubes are refused (exit 4) naming both; a surface and
 // --body together, or neither, are usage errors.
-TEST(CliMesh, BodiesAreNamedRegionsAndTouchingOnesAreRefused) {
+// Regression (issue 21): bodies that touch were refused; they now share one interface, its own
+// group, and only overlapping bodies are refused.
+TEST(CliMesh, BodiesAreNamedRegionsTouchingOnesShareAnInterfaceOverlappingOnesAreRefused) {
   auto shifted = [](double dx, const std::string& name) {
     kdmesh::SurfaceMesh m = cube(10);
     for (std::size_t i = 0; i < m.points.size(); ++i) m.points.xyz[3 * i] += dx;
@@ -161,7 +163,8 @@ TEST(CliMesh, BodiesAreNamedRegionsAndTouchingOnesAreRefused) {
     kdmesh::write_stl(m, p.string());
     return p.string();
   };
-  const std::string left = shifted(0, "left.stl"), right = shifted(20, "right.stl"), next = shifted(10, "next.stl");
+  const std::string left = shifted(0, "left.stl"), right = shifted(20, "right.stl"), next = shifted(10, "next.stl"),
+                    half = shifted(5, "half.stl");
   const fs::path inp = tmpdir() / "bodies.inp";
   const CliResult r = kdmesh("mesh --body left=" + left + " --body right=" + right + " --size 4 --json -q --inp " +
                              inp.string());
@@ -176,9 +179,21 @@ TEST(CliMesh, BodiesAreNamedRegionsAndTouchingOnesAreRefused) {
   EXPECT_NE(deck.find("*ELSET, ELSET=left"), std::string::npos);
   EXPECT_NE(deck.find("*ELSET, ELSET=right"), std::string::npos);
 
-  const CliResult touch = kdmesh("mesh --body left=" + left + " --body next=" + next + " --size 4 -q");
-  EXPECT_EQ(touch.code, 4);
-  EXPECT_NE(touch.err.find("bodies 'left' and 'next' touch or overlap at (10,"), std::string::npos) << touch.err;
+  const fs::path touch_inp = tmpdir() / "touch.inp";
+  const CliResult touch =
+      kdmesh("mesh --body left=" + left + " --body next=" + next + " --size 4 -q --json --inp " + touch_inp.string());
+  ASSERT_EQ(touch.code, 0) << touch.err;
+  const auto t = nlohmann::json::parse(touch.out);
+  EXPECT_GT(t["mesh_check"]["interface_faces"].get<int>(), 0);
+  EXPECT_EQ(t["mesh_check"]["straddling_tets"], 0);
+  EXPECT_GT(t["counts"]["interface_facets"].get<int>(), 0);
+  for (int k = 0; k < 2; ++k) EXPECT_NEAR(t["bodies"][k]["mesh_volume"].get<double>(), 1000.0, 1e-6);
+  const std::string touch_deck = slurp(touch_inp);
+  EXPECT_NE(touch_deck.find("NAME=left-next"), std::string::npos);
+  EXPECT_NE(touch_deck.find("NAME=left-exterior"), std::string::npos);
+  const CliResult overlap = kdmesh("mesh --body left=" + left + " --body half=" + half + " --size 4 -q");
+  EXPECT_EQ(overlap.code, 4);
+  EXPECT_NE(overlap.err.find("bodies 'left' and 'half' overlap"), std::string::npos) << overlap.err;
   EXPECT_EQ(kdmesh("mesh " + left + " --body right=" + right + " --size 4 -q").code, 2);
   EXPECT_EQ(kdmesh("mesh --size 4 -q").code, 2);
   EXPECT_EQ(kdmesh("mesh --body nopath --size 4 -q").code, 2);

@@ -129,10 +129,6 @@ QuadraticStats make_quadratic(FeMesh& fe, const SurfaceMesh& surface, const Surf
   if (fe.tets.size() % 4 || fe.faces.size() % 3 || fe.edges.size() % 2 ||
       fe.face_entity.size() != fe.num_faces() || fe.edge_entity.size() != fe.num_edges())
     throw UsageError("make_quadratic: inconsistent FeMesh arrays");
-  for (std::uint32_t p : fe.face_entity)
-    if (p >= patches.num_patches)
-      throw UsageError("make_quadratic: face patch " + std::to_string(p) + " is not a patch of the surface (" +
-                       std::to_string(patches.num_patches) + " patches)");
   for (std::uint32_t c : fe.edge_entity)
     if (c >= patches.num_curves())
       throw UsageError("make_quadratic: edge curve " + std::to_string(c) + " is not a curve of the surface (" +
@@ -193,6 +189,7 @@ QuadraticStats make_quadratic(FeMesh& fe, const SurfaceMesh& surface, const Surf
       const std::size_t k = edge_index(fe.faces[3 * f + e[0]], fe.faces[3 * f + e[1]]);
       if (k == ne)
         throw UsageError("make_quadratic: boundary face " + std::to_string(f) + " has an edge of no tet");
+      if (fe.face_entity[f] >= patches.num_patches) continue;  // between two bodies: inside the solid
       std::uint32_t& p = edge_patch[k];
       p = p == kNoEntity || p == fe.face_entity[f] ? fe.face_entity[f] : kMixed;
     }

@@ -62,11 +62,12 @@ struct QuadraticStats {
 /// Positions (options.curved): feature edges (fe.edges) -> the closest point on their curve's
 /// polyline; other boundary edges whose faces lie in one curved patch -> the closest point of
 /// that patch (query.closest when it lands in the patch, else PatchQuery); every other edge
-/// (interior, between patches, in a planar patch) -> its midpoint. Then every tet is checked (det J at its corners and 4 Gauss points, see the .cpp
+/// (interior, between patches, in a planar patch, on an interface between bodies: faces whose
+/// entity is num_patches or more, mesher/fe/body_groups.h) -> its midpoint. Then every tet is checked (det J at its corners and 4 Gauss points, see the .cpp
 /// for the shape functions); an element that fails has its curved mid-edge nodes moved
 /// halfway back to their midpoints (options.halving_steps times), then onto them (which only
 /// ever straightens its neighbours), repeated until every element passes.
-/// Throws UsageError if fe is not order 1 or its entities do not match `patches`.
+/// Throws UsageError if fe is not order 1 or its curves do not match `patches`.
 QuadraticStats make_quadratic(FeMesh& fe, const SurfaceMesh& surface, const SurfaceQuery& query,
                               const SurfacePatches& patches, const QuadraticOptions& options = {});
 

@@ -1,6 +1,7 @@
 # kdmesh — named bodies from Python (issue 21): kdmesh.mesh(None, bodies=[...]) meshes several
 # solids, each its region in list order and its named volume group, through meshio and the
-# Gmsh writer; touching bodies raise SurfaceError naming both and a point.
+# Gmsh writer; touching bodies share a conforming interface, overlapping ones raise SurfaceError
+# naming both and a point.
 # SPDX-License-Identifier: AGPL-3.0-or-later
 import numpy as np
 import pytest
@@ -49,14 +50,25 @@ def test_bodies_are_named_regions_in_list_order(tmp_path):
     assert back.field_data["right"][1] == 3 and back.field_data["left"][1] == 3  # physical volumes
 
 
-def test_touching_bodies_raise_surface_error_naming_both(tmp_path):
+def test_touching_bodies_share_one_interface_and_overlapping_ones_raise(tmp_path):
+    """Regression (issue 21): touching bodies raised SurfaceError; now they are meshed with one
+    conforming interface, the group 'a-b', and only overlapping ones raise."""
     a = box_stl(tmp_path / "a.stl", [0, 0, 0], [1, 1, 1])
     b = box_stl(tmp_path / "b.stl", [1, 0, 0], [2, 1, 1])
+    m = kdmesh.mesh(None, size=0.3, bodies=[{"name": "a", "input": a}, {"name": "b", "input": b}])
+    centroids = m.points[m.tets].mean(axis=1)
+    assert np.array_equal(m.regions, np.where(centroids[:, 0] > 1, 1, 0))
+    dim, faces = m.groups["a-b"]
+    assert dim == 2 and len(faces) > 0
+    assert m.stats["mesh_check"]["interface_faces"] == len(faces)
+    for name in ("a-exterior", "b-exterior"):
+        assert m.groups[name][0] == 2 and len(m.groups[name][1]) > 0
+    half = box_stl(tmp_path / "half.stl", [0.5, 0, 0], [1.5, 1, 1])
     with pytest.raises(kdmesh.SurfaceError) as e:
-        kdmesh.mesh(None, size=0.3, bodies=[{"name": "a", "input": a}, {"name": "b", "input": b}])
-    assert "'a' and 'b' touch or overlap" in str(e.value)
-    assert e.value.bodies == ["a", "b"] and e.value.exit_code == 4
-    assert e.value.where.shape == (1, 3) and e.value.where[0, 0] == 1.0
+        kdmesh.mesh(None, size=0.3, bodies=[{"name": "a", "input": a}, {"name": "half", "input": half}])
+    assert "'a' and 'half' overlap" in str(e.value)
+    assert e.value.bodies == ["a", "half"] and e.value.exit_code == 4
+    assert e.value.where.shape == (1, 3)
     with pytest.raises(kdmesh.UsageError):
         kdmesh.mesh(a, size=0.3, bodies=[{"name": "b", "input": b}])  # a surface and bodies
     with pytest.raises(kdmesh.UsageError):

@@ -175,6 +175,11 @@ nlohmann::json mesh_check_json(const MeshCheck& c) {
           {"max_hausdorff", c.max_hausdorff},
           {"open_edges", c.open_edges},
           {"nonmanifold_vertices", c.nonmanifold_vertices},
+          {"interface_faces", c.interface_faces},
+          {"straddling_tets", c.straddling_tets},
+          {"offinterface_vertices", c.offinterface_vertices},
+          {"offinterface_faces", c.offinterface_faces},
+          {"max_interface_hausdorff", c.max_interface_hausdorff},
           {"mesh_volume", c.mesh_volume},
           {"solid_volume", c.solid_volume},
           {"volume_error", c.volume_error},
@@ -250,6 +255,7 @@ nlohmann::json counts_json(const MeshReport& r) {
     j["surface_facets"] = c.surface_facets;
     j["shells"] = c.shells;
     j["bodies"] = c.bodies;
+    if (c.interface_facets) j["interface_facets"] = c.interface_facets;
   }
   if (r.has_features) {
     j["feature_edges"] = c.feature_edges;
@@ -429,6 +435,7 @@ void add_report_json(const MeshReport& r, const FeMesh* fe, nlohmann::json& j) {
       bodies.push_back({{"name", b.name}, {"input", b.input}, {"region", k}, {"solid_volume", b.solid_volume}});
       if (r.has_check)
         bodies.back().update({{"mesh_volume", b.mesh_volume}, {"volume_error", b.volume_error}, {"tets", b.tets}});
+      if (r.has_quality) bodies.back().update({{"min_dihedral", b.min_dihedral}, {"max_dihedral", b.max_dihedral}});
     }
     j["bodies"] = bodies;
   }
