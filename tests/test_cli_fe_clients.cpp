@@ -20,7 +20,9 @@
 
 #include "core/fe_mesh.h"
 #include "io/msh_reader.h"
+#include "io/surface_io.h"
 #include "mesher/fe/fe_assembly.h"
+#include "tests/support/box_surface.h"
 #include "tests/support/clients.h"
 #include "tests/support/run_cli.h"
 
@@ -254,6 +256,46 @@ TEST(FeClients, GmshAgreesWithTheQuadraticJob) {
   check_gmsh_stats(run.file("msh"), e, e.faces);
   check_gmsh_stats(run.file("medit"), e, e.faces);
   check_gmsh_resave(run.file("msh"), e, 2);
+}
+
+// Two touching bodies (issue 21): Gmsh reads the assembly's MSH 4.1 and MEDIT files with the
+// nodes, tets and triangles of the summary (the boundary faces and, once each, the faces of the
+// interface between the bodies), and saved again by Gmsh, the physical groups: both volumes,
+// both exteriors and the interface, with their elements.
+TEST(FeClients, GmshAgreesWithAnAssemblyOfTwoTouchingBodies) {
+  KDMESH_NEED_CLIENT(have_command("gmsh"), "gmsh");
+  const fs::path dir = tmpdir() / "assembly";
+  fs::create_directories(dir);
+  write_stl(test::box_surface({0, 0, 0}, {1, 1, 1}), (dir / "first.stl").string());
+  write_stl(test::box_surface({1, 0, 0}, {2, 1, 1}), (dir / "second.stl").string());
+  test::write_text_file((dir / "pair.yaml").string(),
+                        "jobs:\n  - name: pair\n    bodies: [{name: first, input: first.stl}, {name: second, input: second.stl}]\n"
+                        "    size: 0.25\n    output: {summary: pair.json, msh: pair.msh, mesh: pair.mesh}\n");
+  const test::CliResult r = test::run_kdmesh("batch " + (dir / "pair.yaml").string() + " -q --out-dir " + dir.string(), dir);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  std::ifstream in(dir / "pair.json");
+  const json s = json::parse(in);
+  Expected e;
+  e.nodes = s["counts"]["nodes"].get<long>();
+  e.tets = s["counts"]["tets"].get<long>();
+  const long interface_faces = s["mesh_check"]["interface_faces"].get<long>();
+  EXPECT_GT(interface_faces, 0);
+  e.faces = s["counts"]["boundary_faces"].get<long>() + interface_faces;
+  e.edges = 0;  // no curve group: MSH 4.1 keeps the entities of some group only
+  e.volume = s["mesh_check"]["mesh_volume"].get<double>();
+  for (const json& g : s["groups"])
+    e.groups.push_back({g["name"].get<std::string>(), g["dim"].get<int>(), g["entities"].get<long>(),
+                        g["elements"].get<long>()});
+  const Expected::Group* between = find_group(e, "first-second", 2);
+  ASSERT_NE(between, nullptr);
+  EXPECT_EQ(between->elements, interface_faces);
+  for (const char* name : {"first", "second"}) {
+    EXPECT_NE(find_group(e, name, 3), nullptr) << name;
+    EXPECT_NE(find_group(e, std::string(name) + "-exterior", 2), nullptr) << name;
+  }
+  check_gmsh_stats((dir / "pair.msh").string(), e, e.faces);
+  check_gmsh_stats((dir / "pair.mesh").string(), e, e.faces);
+  check_gmsh_resave((dir / "pair.msh").string(), e, 1);
 }
 
 // =============================================================================================
