@@ -34,10 +34,17 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 echo "generate: $(openscad --version 2>&1)"
 
-MODELS=(gearbox/gearbox block/block)
-for m in "${MODELS[@]}"; do
+# Each output: its STL path (no extension) and its source, with the part to render ("" = the
+# whole file). The gear box assembly's parts come from gearbox.scad's `part` variable.
+MODELS=(gearbox/gearbox block/block gearbox/housing gearbox/gear gearbox/shaft gearbox/bearing_a gearbox/bearing_b)
+SOURCES=(gearbox/gearbox block/block gearbox/gearbox gearbox/gearbox gearbox/gearbox gearbox/gearbox gearbox/gearbox)
+PARTS=("" "" housing gear shaft bearing_a bearing_b)
+for i in "${!MODELS[@]}"; do
+  m="${MODELS[$i]}"
   tmp="$m.tmp-$$.stl"
-  openscad -q --export-format binstl -o "$tmp" "$m.scad"
+  define=()
+  [ -n "${PARTS[$i]}" ] && define=(-D "part=\"${PARTS[$i]}\"")
+  openscad -q --export-format binstl "${define[@]}" -o "$tmp" "${SOURCES[$i]}.scad"
   # OpenSCAD's facet order varies from run to run: sort it (canonical_stl.py)
   python3 canonical_stl.py "$tmp" "$m.stl" "$(basename "$m")"
   rm -f "$tmp"
@@ -45,6 +52,12 @@ for m in "${MODELS[@]}"; do
   n=$(od -An -t u4 -j 80 -N 4 "$m.stl" | tr -d ' ')
   printf 'generate: models/%s.stl  %8d facets  %9d bytes\n' "$m" "$n" "$(stat -c %s "$m.stl")"
 done
+
+# The gear box's parts touch on faces that OpenSCAD rounds differently part by part (a float32
+# ulp): make them coincide exactly (weld_parts.py), then sort each again.
+PARTS_IN_ORDER=(gearbox/housing gearbox/gear gearbox/shaft gearbox/bearing_a gearbox/bearing_b)
+python3 weld_parts.py 2e-5 "${PARTS_IN_ORDER[@]/%/.stl}"
+for m in "${PARTS_IN_ORDER[@]}"; do python3 canonical_stl.py "$m.stl" "$m.stl" "$(basename "$m")"; done
 
 if [ $check -eq 1 ]; then
   for m in "${MODELS[@]}"; do

@@ -128,7 +128,11 @@ void check_not_nested(const std::vector<PreparedSurface>& parts, const std::vect
 
 // ---------------------------------------------------------------------------------------------
 // Touching bodies: imprinting and the interfaces.
-using Mesh = CGAL::Surface_mesh<K::Point_3>;
+// Exact constructions: the points corefinement creates where edges of one body cross facets of
+// the other lie exactly on both (with Epick, rounded intersection points off the facets' planes
+// crashed CGAL 5.5's face triangulation on the gear box's coincident cylinders). They are
+// rounded to doubles once, after the interfaces were found exactly.
+using Mesh = CGAL::Surface_mesh<EK::Point_3>;
 namespace PMP = CGAL::Polygon_mesh_processing;
 
 Mesh to_cgal(const SurfaceMesh& s) {
@@ -136,18 +140,18 @@ Mesh to_cgal(const SurfaceMesh& s) {
   std::vector<Mesh::Vertex_index> v(s.points.size());
   for (std::uint32_t i = 0; i < s.points.size(); ++i) {
     const double* p = s.points.p(i);
-    v[i] = m.add_vertex(K::Point_3(p[0], p[1], p[2]));
+    v[i] = m.add_vertex(EK::Point_3(p[0], p[1], p[2]));
   }
   for (std::size_t f = 0; f < s.num_tris(); ++f) m.add_face(v[s.tri(f)[0]], v[s.tri(f)[1]], v[s.tri(f)[2]]);
   return m;
 }
 
 /// The facets of a CGAL mesh as point triples, in face order.
-std::vector<std::array<K::Point_3, 3>> triangles(const Mesh& m) {
-  std::vector<std::array<K::Point_3, 3>> t;
+std::vector<std::array<EK::Point_3, 3>> triangles(const Mesh& m) {
+  std::vector<std::array<EK::Point_3, 3>> t;
   t.reserve(m.number_of_faces());
   for (Mesh::Face_index f : m.faces()) {
-    std::array<K::Point_3, 3> x;
+    std::array<EK::Point_3, 3> x;
     int k = 0;
     for (Mesh::Vertex_index v : CGAL::vertices_around_face(m.halfedge(f), m)) x[std::size_t(k++)] = m.point(v);
     t.push_back(x);
@@ -156,18 +160,20 @@ std::vector<std::array<K::Point_3, 3>> triangles(const Mesh& m) {
 }
 
 /// Exactly: triangle u lies in triangle w's plane and its centroid in w (closed).
-bool lies_on(const std::array<K::Point_3, 3>& u, const std::array<K::Point_3, 3>& w) {
-  for (const K::Point_3& p : u)
+bool lies_on(const std::array<EK::Point_3, 3>& u, const std::array<EK::Point_3, 3>& w) {
+  for (const EK::Point_3& p : u)
     if (CGAL::orientation(w[0], w[1], w[2], p) != CGAL::COPLANAR) return false;
-  auto E = [](const K::Point_3& p) { return EK::Point_3(p.x(), p.y(), p.z()); };
-  const EK::Point_3 c = CGAL::centroid(E(u[0]), E(u[1]), E(u[2]));
-  return EK::Triangle_3(E(w[0]), E(w[1]), E(w[2])).has_on(c);
+  return EK::Triangle_3(w[0], w[1], w[2]).has_on(CGAL::centroid(u[0], u[1], u[2]));
 }
 
-bool same_facing(const std::array<K::Point_3, 3>& u, const std::array<K::Point_3, 3>& w) {
-  const K::Vector_3 nu = CGAL::cross_product(u[1] - u[0], u[2] - u[0]);
-  const K::Vector_3 nw = CGAL::cross_product(w[1] - w[0], w[2] - w[0]);
-  return nu * nw > 0;
+bool same_facing(const std::array<EK::Point_3, 3>& u, const std::array<EK::Point_3, 3>& w) {
+  const EK::Vector_3 nu = CGAL::cross_product(u[1] - u[0], u[2] - u[0]);
+  const EK::Vector_3 nw = CGAL::cross_product(w[1] - w[0], w[2] - w[0]);
+  return CGAL::is_positive(nu * nw);
+}
+
+std::array<double, 3> rounded(const EK::Point_3& p) {
+  return {CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())};
 }
 
 /// Two bodies whose surfaces meet, and a point where they do.
@@ -178,7 +184,7 @@ struct Contact {
 
 struct Touching {
   std::vector<Mesh> mesh;                                  ///< imprinted, per body
-  std::vector<std::vector<std::array<K::Point_3, 3>>> tri; ///< their facets
+  std::vector<std::vector<std::array<EK::Point_3, 3>>> tri; ///< their facets
   std::vector<std::vector<std::uint32_t>> on;              ///< per facet: the body it lies on, or kNoFacet
 };
 
@@ -204,8 +210,8 @@ void mark_interface(Touching& t, std::uint32_t a, std::uint32_t b, const std::ve
     if (g_on) t.on[b][g] = a;
   });
   if (overlap.first != kNoFacet) {
-    const K::Point_3 c = CGAL::centroid(t.tri[a][overlap.first][0], t.tri[a][overlap.first][1], t.tri[a][overlap.first][2]);
-    const std::array<double, 3> at{c.x(), c.y(), c.z()};
+    const std::array<double, 3> at =
+        rounded(CGAL::centroid(t.tri[a][overlap.first][0], t.tri[a][overlap.first][1], t.tri[a][overlap.first][2]));
     throw BodyContactError("bodies '" + names[a] + "' and '" + names[b] + "' overlap: their surfaces coincide at " +
                                coords(at) + " facing the same way (both solids on one side)",
                            {}, {a, b}, {names[a], names[b]}, at);
@@ -247,8 +253,8 @@ PreparedSurface join_touching(std::vector<PreparedSurface> parts, const std::vec
   for (std::uint32_t a = 0; a < nb; ++a)
     for (std::uint32_t f = 0; f < t.tri[a].size(); ++f) {
       if (t.on[a][f] != kNoFacet) continue;
-      const K::Point_3 c = CGAL::centroid(t.tri[a][f][0], t.tri[a][f][1], t.tri[a][f][2]);
-      const double q[3] = {c.x(), c.y(), c.z()};
+      const std::array<double, 3> c = rounded(CGAL::centroid(t.tri[a][f][0], t.tri[a][f][1], t.tri[a][f][2]));
+      const double q[3] = {c[0], c[1], c[2]};
       for (const auto& [x, y, at] : pairs) {
         if (x != a && y != a) continue;
         const std::uint32_t b = x == a ? y : x;
@@ -264,9 +270,9 @@ PreparedSurface join_touching(std::vector<PreparedSurface> parts, const std::vec
   for (const auto& [a, b, at] : pairs) {
     double area_a = 0, area_b = 0;
     for (std::uint32_t f = 0; f < t.tri[a].size(); ++f)
-      if (t.on[a][f] == b) area_a += std::sqrt(K::Triangle_3(t.tri[a][f][0], t.tri[a][f][1], t.tri[a][f][2]).squared_area());
+      if (t.on[a][f] == b) area_a += std::sqrt(CGAL::to_double(EK::Triangle_3(t.tri[a][f][0], t.tri[a][f][1], t.tri[a][f][2]).squared_area()));
     for (std::uint32_t g = 0; g < t.tri[b].size(); ++g)
-      if (t.on[b][g] == a) area_b += std::sqrt(K::Triangle_3(t.tri[b][g][0], t.tri[b][g][1], t.tri[b][g][2]).squared_area());
+      if (t.on[b][g] == a) area_b += std::sqrt(CGAL::to_double(EK::Triangle_3(t.tri[b][g][0], t.tri[b][g][1], t.tri[b][g][2]).squared_area()));
     if (area_a == 0 && area_b == 0) {
       throw BodyContactError("bodies '" + names[a] + "' and '" + names[b] + "' touch at " + coords(at) +
                                  " only along an edge or at a point, with no face in common: such a contact "
@@ -284,8 +290,8 @@ PreparedSurface join_touching(std::vector<PreparedSurface> parts, const std::vec
   BodyInterfaces ifc;
   std::vector<std::uint32_t> outer_body;  // per outer facet
   std::map<std::array<double, 3>, std::uint32_t> outer_id, ifc_id;
-  auto id_of = [](std::map<std::array<double, 3>, std::uint32_t>& ids, PointSet& pts, const K::Point_3& p) {
-    const std::array<double, 3> x{p.x(), p.y(), p.z()};
+  auto id_of = [](std::map<std::array<double, 3>, std::uint32_t>& ids, PointSet& pts, const EK::Point_3& p) {
+    const std::array<double, 3> x = rounded(p);
     auto [it, fresh] = ids.emplace(x, std::uint32_t(pts.size()));
     if (fresh) pts.push_back(x[0], x[1], x[2]);
     return it->second;
@@ -294,10 +300,10 @@ PreparedSurface join_touching(std::vector<PreparedSurface> parts, const std::vec
     for (std::uint32_t f = 0; f < t.tri[a].size(); ++f) {
       const std::uint32_t b = t.on[a][f];
       if (b == kNoFacet) {
-        for (const K::Point_3& p : t.tri[a][f]) outer.tris.push_back(id_of(outer_id, outer.points, p));
+        for (const EK::Point_3& p : t.tri[a][f]) outer.tris.push_back(id_of(outer_id, outer.points, p));
         outer_body.push_back(a);
       } else if (a < b) {
-        for (const K::Point_3& p : t.tri[a][f]) ifc.mesh.tris.push_back(id_of(ifc_id, ifc.mesh.points, p));
+        for (const EK::Point_3& p : t.tri[a][f]) ifc.mesh.tris.push_back(id_of(ifc_id, ifc.mesh.points, p));
         ifc.bodies.push_back({a, b});
       }
     }

@@ -1,4 +1,6 @@
-// kdmesh — the gear box model: a housing plus a spur gear, two disjoint closed bodies (mm).
+// kdmesh — the gear box model (mm): an assembly of a housing, a shaft, a spur gear on it and two
+// bearing rings holding the shaft in the housing's bores, each its own closed body; the parts
+// touch where they should (ring | housing, ring | shaft, gear | shaft) on coincident faces.
 // SPDX-License-Identifier: AGPL-3.0-or-later
 //
 // Regenerate with models/generate.sh (do not edit gearbox.stl by hand).
@@ -17,6 +19,16 @@
 //   holes r = 6.5, hub r = 24 for |y| <= 30, bore r = 10.
 // Clearances gear <-> housing: 11 mm to floor and roof (z 19..131 vs 8..142), 21 mm to the
 //   x walls, 22 mm from the hub ends to the y walls (|y| 30 vs 52).
+// Shaft: r = 10 (the gear's bore) about the bearing axis, |y| <= 85 (out of both bosses).
+// Bearing rings: r = 10 to 18 (the shaft to the bore), 55 <= |y| <= 71 (in the wall and boss).
+// Coincident faces are made of the same vertices: every cylinder is $fn = 64 about the same
+// axis, turned by the same rotate([-90, 0, 0]), so the parts' STLs share their coordinates.
+//
+// `part` selects what is rendered: "housing", "gear", "shaft", "bearing_a" (y < 0),
+// "bearing_b" (y > 0), one STL each (the assembly, models/gearbox/gearbox.yaml), or
+// "housing_gear": housing and gear in one file (gearbox.stl: the input of the paper-table and
+// TetGen comparisons, docs/tetgen_comparison.md).
+part = "housing_gear";
 
 $fn = 64;
 
@@ -104,5 +116,19 @@ module gear() {
   }
 }
 
-housing();
-gear();
+module shaft() {
+  translate([0, -85, 75]) rotate([-90, 0, 0]) cylinder(r = 10, h = 170);
+}
+
+module bearing(s) {
+  translate([0, s > 0 ? 55 : -71, 75]) rotate([-90, 0, 0]) difference() {
+    cylinder(r = 18, h = 16);
+    translate([0, 0, -1]) cylinder(r = 10, h = 18);
+  }
+}
+
+if (part == "housing" || part == "housing_gear") housing();
+if (part == "gear" || part == "housing_gear") gear();
+if (part == "shaft") shaft();
+if (part == "bearing_a") bearing(-1);
+if (part == "bearing_b") bearing(1);

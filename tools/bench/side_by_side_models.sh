@@ -15,7 +15,7 @@ mkdir -p "$out" && cd "$out"
 for m in gearbox block; do
   y=$here/models/$m/$m-paper.yaml
   d=$(dirname $y)
-  sed -e "s|input: \([a-z]*\).stl|input: $d/\1.stl|" -e "s|      summary: \(.*\)-paper.json|      summary: \1-paper.json\n      nodes: $m.xyz|" $y > $m.yaml
+  sed -e "s|input: \([a-z_]*\).stl|input: $d/\1.stl|g" -e "s|      summary: \(.*\)-paper.json|      summary: \1-paper.json\n      nodes: $m.xyz|" $y > $m.yaml
   /usr/bin/time -v $K batch $m.yaml -q > $m-pipe.log 2> $m-pipe.time
   for o in kd-bfs hilbert brio; do
     /usr/bin/time -v $K delaunay $m.xyz --order $o --json -q > $m-kd-$o.json 2> $m-kd-$o.time
