@@ -21,6 +21,7 @@
 #include "mesher/surface/surface_prepare.h"
 #include "mesher/surface/region_query.h"
 #include "mesher/surface/surface_bodies.h"
+#include "mesher/surface/surface_cells.h"
 #include "mesher/surface/surface_query.h"
 #include "sizing/features.h"
 
@@ -282,6 +283,7 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
     job.log("placing nodes");
     PlacementOptions po;
     po.seed = params.seed;
+    po.interface_feature_angle = options.feature_angle_deg;
     po.progress = job.progress();
     NodeSet nodes = place_nodes({surface, query, m.sizing, regions}, features, po);
     job.add_seconds("place", clock.seconds());
@@ -559,6 +561,20 @@ MeshResult run(const Job& job, std::vector<NamedSurface> bodies, bool named) {
     for (const NamedSurface& b : bodies)
       all.points.xyz.insert(all.points.xyz.end(), b.surface.points.xyz.begin(), b.surface.points.xyz.end());
     ranges = check_model_ranges(params, all);
+  }
+  if (!named && has_nonmanifold_edges(bodies[0].surface)) {
+    // Internal walls: one region per cell, joined like touching bodies.
+    std::vector<SurfaceMesh> cells = split_cells(bodies[0].surface, params.input);
+    if (cells.size() > 1) {
+      std::vector<NamedSurface> regions;
+      for (std::size_t k = 0; k < cells.size(); ++k)
+        regions.push_back({"region_" + std::to_string(k + 1), params.input, std::move(cells[k])});
+      job.notice("internal walls: the surface bounds " + std::to_string(regions.size()) +
+                 " cells, meshed as the regions region_1 to region_" + std::to_string(regions.size()) +
+                 " with conforming interfaces");
+      bodies = std::move(regions);
+      named = true;
+    }
   }
   const PreparedSurface surface = prepare(job, std::move(bodies), named, ranges);
   const AutoTerms terms = automatic_terms(params, surface);

@@ -8,11 +8,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "mesher/mesh_solid.h"
 #include "mesher/surface/surface_bodies.h"
+#include "mesher/surface/surface_cells.h"
 #include "tests/support/box_surface.h"
 
 namespace kdmesh {
@@ -188,10 +191,103 @@ TEST(MeshBodies, SlabAcrossTwoBlocksTouchesEachOnPartOfItsFace) {
   for (const MeshReport::Body& x : r.report.bodies) EXPECT_LE(x.volume_error, 1e-9) << x.name;
 }
 
+// Faces meant to coincide but off by rounding (as parts exported separately often are): an
+// overlap, refused, and the message says how thin it is and what to do.
+TEST(MeshBodies, OverlapAsThinAsRoundingIsRefusedWithAHint) {
+  const BodyContactError e =
+      contact_error(two("a", box_surface({0, 0, 0}, {1, 1, 1}), "b", box_surface({1 - 1e-9, 0.25, 0.25}, {2, 0.75, 0.75})));
+  const std::string what = e.what();
+  EXPECT_NE(what.find("overlap"), std::string::npos) << what;
+  EXPECT_NE(what.find("exactly the same coordinates"), std::string::npos) << what;
+}
+
 // Surfaces that coincide facing the same way: both solids on one side (a copy of a body).
 TEST(MeshBodies, CoincidingBodiesAreRefusedAsOverlapping) {
   const BodyContactError e = contact_error(two("a", box_surface({0, 0, 0}, {1, 1, 1}), "b", box_surface({0, 0, 0}, {1, 1, 1})));
   EXPECT_NE(std::string(e.what()).find("overlap"), std::string::npos) << e.what();
+}
+
+/// The boxes as one surface with internal walls: their facets with the points welded by
+/// coordinates, a facet shared by two boxes kept once (the boxes' shared faces are triangulated
+/// alike by box_surface).
+SurfaceMesh walled(const std::vector<std::pair<V3, V3>>& boxes) {
+  SurfaceMesh out;
+  std::map<V3, std::uint32_t> id;
+  std::map<std::array<std::uint32_t, 3>, std::size_t> seen;  // sorted corners -> facet
+  std::vector<std::uint8_t> twice;
+  for (const auto& [lo, hi] : boxes) {
+    const SurfaceMesh b = box_surface(lo, hi);
+    for (std::size_t f = 0; f < b.num_tris(); ++f) {
+      std::array<std::uint32_t, 3> v;
+      for (int k = 0; k < 3; ++k) {
+        const double* p = b.points.p(b.tri(f)[k]);
+        auto [it, fresh] = id.emplace(V3{p[0], p[1], p[2]}, std::uint32_t(out.points.size()));
+        if (fresh) out.points.push_back(p[0], p[1], p[2]);
+        v[std::size_t(k)] = it->second;
+      }
+      std::array<std::uint32_t, 3> key = v;
+      std::sort(key.begin(), key.end());
+      if (seen.count(key)) continue;  // the wall, already there from the other box
+      seen[key] = out.num_tris();
+      out.tris.insert(out.tris.end(), v.begin(), v.end());
+    }
+  }
+  return out;
+}
+
+// Internal walls (issue 21): one surface file, non-manifold only where the walls meet, is a
+// multi-region domain with one region per cell. Four boxes in a 2 x 2 grid: two walls crossing
+// at the line x = 1, y = 1 (four facets around each of its edges, three at the walls' rims).
+TEST(MeshBodies, SurfaceWithInternalWallsIsOneRegionPerCell) {
+  const SurfaceMesh s = walled({{{0, 0, 0}, {1, 1, 1}}, {{1, 0, 0}, {2, 1, 1}}, {{0, 1, 0}, {1, 2, 1}}, {{1, 1, 0}, {2, 2, 1}}});
+  EXPECT_TRUE(has_nonmanifold_edges(s));
+  const std::vector<SurfaceMesh> cells = split_cells(s, "walls.stl");
+  ASSERT_EQ(cells.size(), 4u);
+  MeshParams p = params(0.25);
+  p.fe_groups = true;
+  p.input = "walls.stl";
+  const MeshResult r = mesh_solid(s, p);
+  const VolumeMesh& m = r.mesh;
+  ASSERT_EQ(r.report.bodies.size(), 4u);
+  // each region is one quadrant's box, each box one region
+  std::map<std::uint32_t, std::uint32_t> quadrant_of;  // region -> quadrant
+  std::size_t wrong = 0;
+  for (std::size_t t = 0; t < m.num_tets(); ++t) {
+    const V3 c = centroid(m, t);
+    const std::uint32_t q = (c[0] > 1 ? 1 : 0) + (c[1] > 1 ? 2 : 0);
+    wrong += quadrant_of.emplace(m.tet_region[t], q).first->second != q;
+  }
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_EQ(quadrant_of.size(), 4u);
+  std::set<std::uint32_t> quadrants;
+  for (const auto& [r, q] : quadrant_of) quadrants.insert(q);
+  EXPECT_EQ(quadrants.size(), 4u);
+  double wall = 0;
+  for (const RegionFace& f : faces_between_regions(m)) wall += area(m, f.v);
+  EXPECT_NEAR(wall, 4.0, 1e-9);  // the two walls, 2 x 1 each
+  for (const MeshReport::Body& b : r.report.bodies) {
+    EXPECT_EQ(b.name.rfind("region_", 0), 0u) << b.name;
+    EXPECT_NEAR(b.mesh_volume, 1.0, 1e-9) << b.name;
+  }
+  bool named = false;
+  for (const FeGroup& g : r.fe.groups) named = named || g.name == "region_1-region_2";
+  EXPECT_TRUE(named);
+}
+
+// A wall that divides nothing (a fin inside one cell, its far edges free) is an open surface,
+// named as such; so is an unwalled surface with an open edge.
+TEST(MeshBodies, WallsThatDivideNothingAreRefused) {
+  SurfaceMesh s = walled({{{0, 0, 0}, {1, 1, 1}}, {{1, 0, 0}, {2, 1, 1}}});
+  s.points.push_back(0.5, 0.5, 0.5);  // a fin from the wall's edge at x = 1, y = 0 into the first box
+  const std::uint32_t fin = std::uint32_t(s.points.size() - 1);
+  std::uint32_t a = kNoFacet, b = kNoFacet;
+  for (std::uint32_t i = 0; i < s.points.size(); ++i) {
+    const double* q = s.points.p(i);
+    if (q[0] == 1 && q[1] == 0 && q[2] == 0) a = i;
+    if (q[0] == 1 && q[1] == 0 && q[2] == 1) b = i;
+  }
+  s.tris.insert(s.tris.end(), {a, b, fin});
+  EXPECT_THROW(split_cells(s, "fin.stl"), SurfaceError);
 }
 
 // Touching along one edge only (x = 1, y = 1) is contact too: closed facets.

@@ -161,6 +161,12 @@ bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
       e.push_back({face_key(&tv_[4 * std::size_t(t)], i), r, 0});
     }
   const std::size_t nn = fresh.size() / 4;
+  if (region_query)  // touching bodies: every new tet's centroid in the cavity's body
+    for (std::size_t k = 0; k < nn; ++k) {
+      const double* p[4] = {this->p(fresh[4 * k]), this->p(fresh[4 * k + 1]), this->p(fresh[4 * k + 2]),
+                            this->p(fresh[4 * k + 3])};
+      if (!region_ok(&fresh[4 * k], p, old.empty() ? 0 : region_[old[0]])) return false;
+    }
   for (std::size_t k = 0; k < nn; ++k)
     for (int i = 0; i < 4; ++i) e.push_back({face_key(&fresh[4 * k], i), std::uint32_t(4 * k + i), 1});
   std::sort(e.begin(), e.end(), [](const Entry& a, const Entry& b) {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "mesher/node_set.h"
+#include "mesher/surface/region_query.h"
 #include "mesher/surface/surface_query.h"
 
 namespace kdmesh {
@@ -95,6 +96,20 @@ class ImproveTets {
   /// One surface vertex is enough since surface nodes slide on curved surfaces: femur.ply at
   /// diag/40 got a tet of one surface and three interior vertices outside the solid.
   const SurfaceQuery* inside_query = nullptr;
+  /// Touching bodies, when set: such a tet's centroid must moreover lie in its own region's body
+  /// (the mesh check's "no tet across an interface"); replace() and inside_ok_moved() test it.
+  const RegionQuery* region_query = nullptr;
+  /// True when tet ids (positions p), of region r, has no surface vertex or its centroid lies
+  /// in body r (always true without region_query).
+  bool region_ok(const std::uint32_t* ids, const double* const* p, std::uint32_t r) const {
+    if (!region_query) return true;
+    int on_surface = 0;
+    for (int k = 0; k < 4; ++k) on_surface += nodes_->kind[ids[k]] != NodeKind::interior;
+    if (on_surface < 1) return true;
+    double c[3];
+    centroid(p, c);
+    return region_query->region(c) == int(r);
+  }
   /// False when ids (with positions p) form such a tet with its centroid not strictly inside;
   /// true otherwise (and always when inside_query is not set).
   bool inside_ok(const std::uint32_t* ids, const double* const* p) const {
@@ -127,6 +142,12 @@ class ImproveTets {
     centroid(p, c0);
     p[iv] = x;
     centroid(p, c1);
+    if (region_query) {  // the region's body holds the union's points: one test for both
+      if (inside_known_[t] && !inside_query->box_may_touch(c0, c1) &&
+          !region_query->interfaces().box_may_touch(c0, c1))
+        return true;
+      return region_query->region(c1) == int(region_[t]);
+    }
     if (inside_known_[t] && !inside_query->box_may_touch(c0, c1)) return true;
     return inside_query->side(c1) > 0;
   }

@@ -379,6 +379,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain, const ImproveO
                            (options.rounds > 0 && (options.cap_angle > 0 || options.split_angle > 0));
   ImproveTets m(mesh.nodes, mesh.tets, mesh.tet_region);
   m.inside_query = &query;
+  m.region_query = domain.regions;
   auto stage = [&](const std::string& name, std::size_t ops) {
     const double seconds = sw.seconds();
     ImproveStage s;

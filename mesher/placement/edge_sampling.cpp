@@ -104,7 +104,7 @@ std::vector<FeaturePolyline> chain_feature_edges(const SurfaceMesh& surface,
 
 void place_edge_nodes(const SurfaceMesh& surface, const FeatureEdges& features,
                       const SizingField& sizing, double beta, SpacingGrid& grid, NodeSet& nodes,
-                      SpacingGrid* segment_balls) {
+                      SpacingGrid* segment_balls, bool skip_placed_corners) {
   const auto efacet = edge_facets(surface);
   auto facet_of_edge = [&](std::uint32_t a, std::uint32_t b) {
     const auto it = efacet.find(edge_key(a, b));
@@ -126,6 +126,7 @@ void place_edge_nodes(const SurfaceMesh& surface, const FeatureEdges& features,
       throw GeometryError("feature corner " + std::to_string(c) + " is on no surface facet");
     const double* p = surface.points.p(c);
     const float h = float(sizing(p));
+    if (skip_placed_corners && grid.conflicts(p, h, 1e-9)) return;
     nodes.push_back(p, NodeKind::corner, vfacet[c], h);
     grid.insert(p, h);
   };

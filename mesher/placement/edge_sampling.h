@@ -42,8 +42,12 @@ std::vector<FeaturePolyline> chain_feature_edges(const SurfaceMesh& surface,
 /// that segment_balls->conflicts(p, 0, 1) says whether p is strictly inside one. A segment
 /// whose ball holds no other node is an edge of every Delaunay tetrahedralization (Gabriel),
 /// which is how the surface sampling keeps the feature curves in the mesh.
+///
+/// With `skip_placed_corners`, a corner at the place of a node already in `grid` (1e-9 of the
+/// size apart) is not added again: the curves inside an assembly's interfaces end at corners of
+/// the outer surface's curves, placed before them.
 void place_edge_nodes(const SurfaceMesh& surface, const FeatureEdges& features,
                       const SizingField& sizing, double beta, SpacingGrid& grid, NodeSet& nodes,
-                      SpacingGrid* segment_balls = nullptr);
+                      SpacingGrid* segment_balls = nullptr, bool skip_placed_corners = false);
 
 }  // namespace kdmesh

@@ -11,6 +11,7 @@
 #include "mesher/placement/interior_fill.h"
 #include "mesher/placement/spacing_grid.h"
 #include "mesher/placement/surface_sampling.h"
+#include "mesher/surface/surface_bodies.h"
 
 namespace kdmesh {
 
@@ -100,6 +101,9 @@ NodeSet place_nodes(const Domain& domain, const FeatureEdges& features,
   // sees one surface: the outer facets, then each interface facet in both orientations (the
   // pair leaves the ray parity of the union unchanged), ids n_outer + f and n_outer + n_ifc + f.
   const std::size_t n_outer = mesh.num_tris(), n_ifc = ifc.mesh.num_tris(), first = nodes.size_count();
+  const FeatureEdges inner =
+      detect_sharp_edges(ifc.mesh, 0, interface_inner_edges(surface, options.interface_feature_angle));
+  place_edge_nodes(ifc.mesh, inner, sizing, kFeatureBeta, grid, nodes, &feature_balls, true);
   place_surface_nodes(ifc.mesh, sizing, so, grid, nodes, [&](double f) { progress("interfaces", f); }, &feature_balls);
   SurfaceMesh all = mesh;
   const std::uint32_t off = std::uint32_t(all.points.size());

@@ -16,6 +16,10 @@ struct PlacementOptions {
   /// Interior nodes keep at least this many local sizes h(x) away from the surface, so that
   /// the surface triangles stay Delaunay (no interior node inside their diametral balls).
   double interior_clearance = 0.8;
+  /// Touching bodies: interface edges bent by this many degrees or more are feature curves
+  /// (mesher/surface/surface_bodies.h, interface_inner_edges); 0 = only where interfaces meet
+  /// or end.
+  double interface_feature_angle = 0;
   /// Progress: stage name ("edges", "surface", "interior") and fraction done.
   std::function<void(const std::string&, double)> progress;
 };

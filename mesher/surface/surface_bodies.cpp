@@ -16,6 +16,7 @@
 #include <CGAL/intersections.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <map>
@@ -260,24 +261,34 @@ PreparedSurface join_touching(std::vector<PreparedSurface> parts, const std::vec
         const std::uint32_t b = x == a ? y : x;
         if (query[b]->side(q) <= 0) continue;
         const std::array<double, 3> where{q[0], q[1], q[2]};
+        // An overlap as thin as rounding: faces meant to coincide whose coordinates differ.
+        const double depth = query[b]->distance(q);
+        const double* lo = parts[b].bbox_min;
+        const double* hi = parts[b].bbox_max;
+        const double diag = std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+        std::ostringstream hint;
+        hint.precision(3);
+        if (depth <= 1e-6 * diag)
+          hint << " (only " << depth << " deep there: if they are meant to touch, their faces must have exactly "
+               << "the same coordinates; export the parts from one tessellation, or snap their coordinates to "
+               << "each other)";
         throw BodyContactError("bodies '" + names[a] + "' and '" + names[b] + "' overlap: part of the surface of '" +
                                    names[a] + "' (" + inputs[a] + ") lies inside the material of '" + names[b] +
-                                   "' (e.g. at " + coords(where) + "; the surfaces cross at " + coords(at) +
-                                   "); the bodies of a job may touch but not overlap",
+                                   "' (e.g. at " + coords(where) + "; the surfaces cross at " + coords(at) + ")" +
+                                   hint.str() + "; the bodies of a job may touch but not overlap",
                                {}, {a, b}, {names[a], names[b]}, at);
       }
     }
+  std::vector<Contact> edge_only;  // contacts without a shared face
   for (const auto& [a, b, at] : pairs) {
     double area_a = 0, area_b = 0;
     for (std::uint32_t f = 0; f < t.tri[a].size(); ++f)
       if (t.on[a][f] == b) area_a += std::sqrt(CGAL::to_double(EK::Triangle_3(t.tri[a][f][0], t.tri[a][f][1], t.tri[a][f][2]).squared_area()));
     for (std::uint32_t g = 0; g < t.tri[b].size(); ++g)
       if (t.on[b][g] == a) area_b += std::sqrt(CGAL::to_double(EK::Triangle_3(t.tri[b][g][0], t.tri[b][g][1], t.tri[b][g][2]).squared_area()));
-    if (area_a == 0 && area_b == 0) {
-      throw BodyContactError("bodies '" + names[a] + "' and '" + names[b] + "' touch at " + coords(at) +
-                                 " only along an edge or at a point, with no face in common: such a contact "
-                                 "cannot be meshed (move them apart or let them share a face)",
-                             {}, {a, b}, {names[a], names[b]}, at);
+    if (area_a == 0 && area_b == 0) {  // along an edge or at a point: fine where other bodies fill around
+      edge_only.push_back({a, b, at});
+      continue;
     }
     if (!(std::abs(area_a - area_b) <= 1e-9 * std::max(area_a, area_b)))
       throw GeometryError("bodies '" + names[a] + "' and '" + names[b] + "': their interface has area " +
@@ -313,6 +324,14 @@ PreparedSurface join_touching(std::vector<PreparedSurface> parts, const std::vec
   try {
     out = prepare_surface(std::move(outer), "the outer surface of the touching bodies", so);
   } catch (const SurfaceError& e) {
+    if (!edge_only.empty()) {  // the likely cause: bodies that meet along an edge or at a point only
+      const Contact& c = edge_only.front();
+      throw BodyContactError("bodies '" + names[c.a] + "' and '" + names[c.b] + "' touch at " + coords(c.at) +
+                                 " only along an edge or at a point, with no face in common, and no other body "
+                                 "fills around them: their union is not a solid with a 2-manifold surface (" +
+                                 e.what() + "); move them apart or let them share a face",
+                             e.facets(), {c.a, c.b}, {names[c.a], names[c.b]}, c.at);
+    }
     throw SurfaceError(std::string(e.what()) + " (where bodies touch, their union must be a solid bounded by a "
                        "2-manifold surface)", e.facets(), e.defect());
   }
@@ -409,11 +428,20 @@ PreparedSurface join_bodies(std::vector<PreparedSurface> parts, const std::vecto
   return out;
 }
 
-std::vector<std::uint32_t> interface_rim_edges(const PreparedSurface& surface) {
+namespace {
+
+/// The interface edges that are feature curves (other than two interface facets, facets of
+/// different pairs of bodies, or bent by angle_deg or more between two facets of one pair),
+/// each as (interface point ids, outer point ids or kNoFacet where an edge is no outer edge).
+struct InterfaceFeature {
+  std::uint32_t a, b;            ///< interface mesh point ids
+  std::uint32_t outer_a, outer_b;  ///< outer surface point ids, when the edge is an outer edge
+};
+
+std::vector<InterfaceFeature> interface_features(const PreparedSurface& surface, double angle_deg) {
   const BodyInterfaces& ifc = surface.interfaces;
-  std::vector<std::uint32_t> out;
+  std::vector<InterfaceFeature> out;
   if (ifc.empty()) return out;
-  // Interface edges with other than two facets, or between facets of different body pairs.
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> edge_facets;
   for (std::uint32_t f = 0; f < ifc.mesh.num_tris(); ++f)
     for (int j = 0; j < 3; ++j) {
@@ -437,15 +465,46 @@ std::vector<std::uint32_t> interface_rim_edges(const PreparedSurface& surface) {
     auto it = outer_id.find({p[0], p[1], p[2]});
     return it == outer_id.end() ? kNoFacet : it->second;
   };
+  auto normal = [&](std::uint32_t f) {
+    const std::uint32_t* t = ifc.mesh.tri(f);
+    const double *a = ifc.mesh.points.p(t[0]), *b = ifc.mesh.points.p(t[1]), *c = ifc.mesh.points.p(t[2]);
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    return std::array<double, 3>{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+  };
+  const double cos_limit = std::cos(angle_deg * 3.14159265358979323846 / 180);
   for (const auto& [e, fs] : edge_facets) {
-    bool rim = fs.size() != 2;
-    for (std::uint32_t f : fs) rim = rim || ifc.bodies[f] != ifc.bodies[fs[0]];
-    if (!rim) continue;
-    const std::uint32_t a = outer(e.first), b = outer(e.second);
-    if (a == kNoFacet || b == kNoFacet || !outer_edges.count({std::min(a, b), std::max(a, b)})) continue;
-    out.push_back(a);
-    out.push_back(b);
+    bool feature = fs.size() != 2;
+    for (std::uint32_t f : fs) feature = feature || ifc.bodies[f] != ifc.bodies[fs[0]];
+    if (!feature && angle_deg > 0 && angle_deg < 180) {
+      const std::array<double, 3> n0 = normal(fs[0]), n1 = normal(fs[1]);
+      const double d = n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2];
+      const double l = std::sqrt((n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]) *
+                                 (n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]));
+      // The two facets of a manifold interface edge run it opposite ways: the deviation from
+      // flat is the angle between their normals.
+      feature = l > 0 && d <= cos_limit * l;
+    }
+    if (!feature) continue;
+    std::uint32_t a = outer(e.first), b = outer(e.second);
+    if (a == kNoFacet || b == kNoFacet || !outer_edges.count({std::min(a, b), std::max(a, b)})) a = b = kNoFacet;
+    out.push_back({e.first, e.second, a, b});
   }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> interface_rim_edges(const PreparedSurface& surface) {
+  std::vector<std::uint32_t> out;
+  for (const InterfaceFeature& f : interface_features(surface, 0))
+    if (f.outer_a != kNoFacet) out.insert(out.end(), {f.outer_a, f.outer_b});
+  return out;
+}
+
+std::vector<std::uint32_t> interface_inner_edges(const PreparedSurface& surface, double angle_deg) {
+  std::vector<std::uint32_t> out;
+  for (const InterfaceFeature& f : interface_features(surface, angle_deg))
+    if (f.outer_a == kNoFacet) out.insert(out.end(), {f.a, f.b});
   return out;
 }
 

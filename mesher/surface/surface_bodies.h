@@ -49,8 +49,9 @@ class BodyContactError : public SurfaceError {
 ///    mesh is then the outer surface of their union, and its `interfaces` hold the facets
 ///    between two bodies (once each) and every body's own surface. A facet of one body inside
 ///    another's material, coinciding facets facing the same way (both solids on one side) and
-///    a contact along an edge or at a point only are BodyContactErrors naming both bodies and
-///    a point.
+///    a contact along an edge or at a point only where no other body fills around it (the
+///    union's surface is then not 2-manifold) are BodyContactErrors naming both bodies and a
+///    point.
 /// `names` gives the bodies' names (names.size() == parts.size() >= 1). Throws UsageError
 /// for a size mismatch, an empty name or a repeated one.
 PreparedSurface join_bodies(std::vector<PreparedSurface> parts, const std::vector<std::string>& names,
@@ -61,5 +62,11 @@ PreparedSurface join_bodies(std::vector<PreparedSurface> parts, const std::vecto
 /// pairs of bodies): the rims of the interfaces, feature edges of the mesh. Empty without
 /// interfaces.
 std::vector<std::uint32_t> interface_rim_edges(const PreparedSurface& surface);
+
+/// The interface edges inside the solid that are feature curves (point id pairs of
+/// surface.interfaces.mesh): where interfaces of different pairs of bodies meet (walls crossing),
+/// where an interface ends inside the solid, and where it bends by angle_deg or more. Node
+/// placement samples them like the outer surface's feature edges. Empty without interfaces.
+std::vector<std::uint32_t> interface_inner_edges(const PreparedSurface& surface, double angle_deg);
 
 }  // namespace kdmesh

@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "mesher/parallel_for.h"
+#include "mesher/tet_quality.h"
 #include "mesher/volume/boundary_faces.h"
 
 namespace kdmesh {
@@ -135,6 +136,13 @@ std::uint8_t judge_interface_face(const std::uint32_t* fv, std::uint32_t ra, std
   if (w) return w;
   const RegionQuery& rq = *domain.regions;
   const double *p0 = nodes.points.p(fv[0]), *p1 = nodes.points.p(fv[1]), *p2 = nodes.points.p(fv[2]);
+  // Its vertices on an interface, as the mesh check wants them (an outer-surface node next to
+  // an interface's rim can join a face between two regions).
+  const double* lo = domain.surface.bbox_min;
+  const double* hi = domain.surface.bbox_max;
+  const double on = kOnSurfaceDistance * std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+  for (const double* p : {p0, p1, p2})
+    if (!(rq.interfaces().distance(p) <= on)) return kFaceFar;
   double c[3], cp[3];
   for (int k = 0; k < 3; ++k) c[k] = (p0[k] + p1[k] + p2[k]) / 3;
   std::uint32_t facet = kNoFacet;

@@ -33,9 +33,10 @@ struct InterfaceFaces {
 InterfaceFaces interface_faces(const Triangulation& tri, const std::vector<std::uint32_t>& label);
 
 /// Judges one face between regions ra and rb: bad (bits of judge_face, mesher/volume/
-/// boundary_faces.h) if a vertex is interior-kind, if its centroid or an edge midpoint is farther
-/// than tolerance * h(centroid) from the interfaces, or if the interface closest to its
-/// centroid lies between other bodies (kFaceAgainst).
+/// boundary_faces.h) if a vertex is interior-kind, if a vertex is off the interfaces (farther
+/// than kOnSurfaceDistance x the bounding box diagonal, the mesh check's rule) or its centroid
+/// or an edge midpoint farther than tolerance * h(centroid) from them (kFaceFar), or if the
+/// interface closest to its centroid lies between other bodies (kFaceAgainst).
 std::uint8_t judge_interface_face(const std::uint32_t* fv, std::uint32_t ra, std::uint32_t rb, const NodeSet& nodes,
                                   const Domain& domain, double tolerance);
 
