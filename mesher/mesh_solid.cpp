@@ -563,8 +563,14 @@ MeshResult run(const Job& job, std::vector<NamedSurface> bodies, bool named) {
     ranges = check_model_ranges(params, all);
   }
   if (!named && has_nonmanifold_edges(bodies[0].surface)) {
-    // Internal walls: one region per cell, joined like touching bodies.
-    std::vector<SurfaceMesh> cells = split_cells(bodies[0].surface, params.input);
+    // Internal walls: one region per cell, joined like touching bodies. Duplicated facets are
+    // left to the surface check below (its message, and the repair that removes them).
+    std::vector<SurfaceMesh> cells;
+    try {
+      cells = split_cells(bodies[0].surface, params.input);
+    } catch (const SurfaceError& e) {
+      if (e.defect() != SurfaceError::Defect::duplicates) throw;
+    }
     if (cells.size() > 1) {
       std::vector<NamedSurface> regions;
       for (std::size_t k = 0; k < cells.size(); ++k)

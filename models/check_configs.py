@@ -21,11 +21,12 @@ import yaml
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from check_stl import read_surface  # noqa: E402
 
-JOB_KEYS = {"name", "input", "scale", "size", "min_size", "gradation", "sharp_angle", "zones",
-            "order", "seed", "check", "output"}
-ORDERS = {"kd-bfs", "kd-bfs-alt", "kd-local", "hilbert", "brio", "random", "input"}
+# The keys the shipped files use (tools/app/job_config.cpp has them all).
+JOB_KEYS = {"name", "input", "bodies", "scale", "size", "min_size", "gradation", "sharp_angle", "zones",
+            "order", "seed", "check", "output", "groups"}
+ORDERS = {"kd-bfs", "kd-bfs-alt", "kd-bfs-hilbert", "kd-local", "hilbert", "brio", "random", "input"}
 CHECKS = {"tetgen", "delaunay"}
-OUTPUTS = {"vtu", "summary", "nodes"}
+OUTPUTS = {"vtu", "summary", "nodes", "msh", "inp", "mesh", "boundary_vtu", "xdmf", "exodus"}
 ZONE_KEYS = {
     "sharp_edges": {"angle"}, "polyline": {"points"}, "segment": {"from", "to"},
     "plane": {"origin", "normal"}, "point": {"at"}, "box": {"min", "max"},
@@ -53,9 +54,11 @@ def check_job(where, job, base, errors):
     for k in job:
         if k not in JOB_KEYS:
             err(f"unknown key {k!r}")
-    for k in ("name", "input", "size"):
+    for k in ("name", "size"):
         if k not in job:
             err(f"missing required key {k!r}")
+    if ("input" in job) == ("bodies" in job):
+        err("exactly one of 'input' and 'bodies' is required")
     if not re.fullmatch(r"[A-Za-z0-9_.-]+", str(job.get("name", ""))):
         err("name must match [A-Za-z0-9_.-]+")
     for k in ("scale", "size", "min_size", "gradation"):
@@ -77,13 +80,24 @@ def check_job(where, job, base, errors):
         elif not isinstance(v, str) or "/" in v:
             err(f"output {k} must be a bare file name")
     box = None
-    inp = os.path.join(base, str(job.get("input", "")))
-    if not os.path.isfile(inp):
-        err(f"input {inp} does not exist")
-    elif not inp.lower().endswith((".stl", ".ply")):
-        err("input must be STL or PLY")
-    else:
-        box = bbox_of(inp, job.get("scale", 1.0))
+    bodies = job.get("bodies")
+    if bodies is not None and not (isinstance(bodies, list) and bodies and all(
+            isinstance(b, dict) and set(b) == {"name", "input"} for b in bodies)):
+        err("bodies must be a non-empty list of {name, input}")
+        bodies = []
+    names = [str(b["name"]) for b in bodies or []]
+    if len(set(names)) != len(names) or not all(re.fullmatch(r"[A-Za-z0-9_-]+", n) for n in names):
+        err("body names must be distinct and match [A-Za-z0-9_-]+")
+    for rel in [b["input"] for b in bodies] if bodies is not None else [job.get("input", "")]:
+        inp = os.path.join(base, str(rel))
+        if not os.path.isfile(inp):
+            err(f"input {inp} does not exist")
+        elif not inp.lower().endswith((".stl", ".ply")):
+            err("input must be STL or PLY")
+        else:  # the zones must meet the union of the inputs' boxes
+            lo, hi = bbox_of(inp, job.get("scale", 1.0))
+            box = (lo, hi) if box is None else ([min(a, b) for a, b in zip(box[0], lo)],
+                                                [max(a, b) for a, b in zip(box[1], hi)])
     for i, z in enumerate(job.get("zones", []) or []):
         zw = f"zone {i} ({z.get('name', z.get('type'))})"
         t = z.get("type")
@@ -160,6 +174,16 @@ def load_jobs(path, errors):
     return out
 
 
+def resolved(job, base):
+    """The job with its input paths absolute (to compare jobs of files in different folders)."""
+    out = dict(job)
+    if "input" in job:
+        out["input"] = os.path.normpath(os.path.join(base, job["input"]))
+    if "bodies" in job:
+        out["bodies"] = [dict(b, input=os.path.normpath(os.path.join(base, b["input"]))) for b in job["bodies"]]
+    return out
+
+
 def main(argv):
     here = os.path.dirname(os.path.abspath(__file__))
     files = argv or sorted(glob.glob(os.path.join(here, "**", "*.yaml"), recursive=True))
@@ -180,8 +204,7 @@ def main(argv):
                 errors.append(f"all.yaml: job {n!r} is in no per-model file")
                 continue
             p, o = others[n]
-            a = dict(j, input=os.path.normpath(os.path.join(here, j["input"])))
-            b = dict(o, input=os.path.normpath(os.path.join(os.path.dirname(p), o["input"])))
+            a, b = resolved(j, here), resolved(o, os.path.dirname(p))
             if a != b:
                 diff = sorted(k for k in set(a) | set(b) if a.get(k) != b.get(k))
                 errors.append(f"all.yaml: job {n!r} differs from {os.path.relpath(p)} in {diff}")

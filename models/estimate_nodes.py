@@ -129,9 +129,11 @@ class Field:
 
 
 def estimate(job, base_dir, columns, seed=1):
-    path = os.path.join(base_dir, job["input"])
+    paths = [os.path.join(base_dir, b["input"]) for b in job["bodies"]] if "bodies" in job \
+        else [os.path.join(base_dir, job["input"])]
     scale = float(job.get("scale", 1.0))
-    tris = [tuple(tuple(scale * c for c in p) for p in t) for t in read_surface(path)]
+    # Touching bodies fill their union: the columns count each body's own inside length.
+    tris = [tuple(tuple(scale * c for c in p) for p in t) for path in paths for t in read_surface(path)]
     field = Field(job, tris)
     xs = [p[0] for t in tris for p in t]
     ys = [p[1] for t in tris for p in t]

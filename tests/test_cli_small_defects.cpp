@@ -101,19 +101,30 @@ TEST(SmallDefects, AsciiStlWithUtf8BomIsRead) {
   EXPECT_EQ(r.code, 0) << r.err;
 }
 
-// Two cubes touching along a face share its facets, facing opposite ways: the duplicates
-// repair cannot fix that, so the refusal must not say it does.
-TEST(SmallDefects, TouchingCubesGetNoFalseRepairHint) {
+// Two cubes touching along a face share its facets, facing opposite ways. They were refused as
+// duplicated facets (and the message must not offer the duplicates repair, which cannot fix
+// that); since issue 21 they are a wall written twice: two regions with one interface. Facets
+// duplicated facing the same way are still refused, with the repair offered.
+TEST(SmallDefects, TouchingCubesInOneFileAreTwoRegions) {
   const fs::path d = fresh("touching");
   kdmesh::SurfaceMesh m;
   add_cube(m, 0, 1);
   add_cube(m, 1, 1);
   kdmesh::write_stl(m, (d / "two.stl").string());
-  const CliResult r = kdmesh("mesh " + (d / "two.stl").string() + " --size 0.5 -q");
-  EXPECT_EQ(r.code, 4) << r.err;
-  EXPECT_TRUE(contains(r.err, "duplicated facets")) << r.err;
-  EXPECT_FALSE(contains(r.err, "--repair duplicates")) << r.err;
-  EXPECT_TRUE(contains(r.err, "no repair applies")) << r.err;
+  const CliResult r = kdmesh("mesh " + (d / "two.stl").string() + " --size 0.5 -q --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["counts"]["bodies"], 2);
+  EXPECT_GT(j["mesh_check"]["interface_faces"].get<int>(), 0);
+  EXPECT_TRUE(contains(j["notices"].dump(), "internal walls")) << j["notices"].dump();
+  kdmesh::SurfaceMesh twice;
+  add_cube(twice, 0, 1);
+  add_cube(twice, 0, 1);
+  kdmesh::write_stl(twice, (d / "twice.stl").string());
+  const CliResult t = kdmesh("mesh " + (d / "twice.stl").string() + " --size 0.5 -q");
+  EXPECT_EQ(t.code, 4) << t.err;
+  EXPECT_TRUE(contains(t.err, "duplicated facets")) << t.err;
+  EXPECT_TRUE(contains(t.err, "--repair duplicates")) << t.err;
 }
 
 TEST(SmallDefects, BatchOfADirectorySaysSo) {

@@ -104,7 +104,7 @@ case "$goal" in
   demo)
     install_deps; build
     "$BUILD_DIR/kdmesh" batch models/all.yaml --jobs 2 --out-dir out
-    echo "setup: wrote out/gearbox.vtu and out/block.vtu (summaries: out/*.json), and the block for solvers: out/block.msh, out/block.inp"
+    echo "setup: wrote out/gearbox.vtu and out/block.vtu (summaries: out/*.json), the gear box assembly for FEniCSx and MOOSE: out/gearbox.xdmf (+ .h5), out/gearbox.exo, and the block for solvers: out/block.msh, out/block.inp"
     ;;
   *) echo "usage: bash tools/setup.sh {demo|test|sanitize|fuzz|memcheck|build|deps}" >&2; exit 2 ;;
 esac

@@ -67,16 +67,41 @@ bool has_nonmanifold_edges(const SurfaceMesh& mesh) {
   return false;
 }
 
-std::vector<SurfaceMesh> split_cells(const SurfaceMesh& m, const std::string& source) {
+std::vector<SurfaceMesh> split_cells(const SurfaceMesh& input, const std::string& source) {
+  for (std::uint32_t v : input.tris)
+    if (v >= input.points.size()) throw SurfaceError(source + ": a facet names point " + std::to_string(v), {});
+  // Two facets on the same corners facing opposite ways are one wall written twice (two parts
+  // touching, exported into one file): one copy stays. Facing the same way, they are duplicates.
+  SurfaceMesh m;
+  m.points = input.points;
+  std::vector<std::uint32_t> orig;  // m's facet -> the input's (messages)
+  {
+    std::map<std::array<std::uint32_t, 3>, std::uint32_t> first;  // sorted corners -> facet
+    for (std::uint32_t f = 0; f < input.num_tris(); ++f) {
+      const std::uint32_t* t = input.tri(f);
+      std::array<std::uint32_t, 3> key{t[0], t[1], t[2]};
+      std::sort(key.begin(), key.end());
+      const auto [it, fresh] = first.emplace(key, f);
+      if (fresh) {
+        m.tris.insert(m.tris.end(), t, t + 3);
+        orig.push_back(f);
+        continue;
+      }
+      const std::uint32_t* u = input.tri(it->second);
+      const int r = u[1] == t[0] ? 1 : u[2] == t[0] ? 2 : 0;  // u rotated to start where t starts
+      if (u[(r + 1) % 3] == t[1])
+        throw SurfaceError(source + ": facets " + std::to_string(it->second) + " and " + std::to_string(f) +
+                               " are duplicates (the same corners, facing the same way)",
+                           {it->second, f}, SurfaceError::Defect::duplicates);
+    }
+  }
   const std::size_t nf = m.num_tris();
-  for (std::uint32_t v : m.tris)
-    if (v >= m.points.size()) throw SurfaceError(source + ": a facet names point " + std::to_string(v), {});
   // Side s of facet f (0: the side its normal points to, 1: the other) is half-facet 2 f + s.
   UnionFind uf(2 * nf);
   for (auto& [edge, list] : edge_facets(m)) {
     const K::Point_3 a = point(m, edge.first), b = point(m, edge.second);
     if (list.size() == 1)
-      throw SurfaceError(source + ": facet " + std::to_string(list[0].facet) + " has an open edge", {list[0].facet});
+      throw SurfaceError(source + ": facet " + std::to_string(orig[list[0].facet]) + " has an open edge", {orig[list[0].facet]});
     // Counter-clockwise about a -> b from the first facet's half-plane: the half-turn (0, pi)
     // is the side its normal as run a -> b points to; within a half, orientation decides.
     const K::Point_3 c0 = point(m, list[0].apex);
@@ -86,9 +111,9 @@ std::vector<SurfaceMesh> split_cells(const SurfaceMesh& m, const std::string& so
       if (o == CGAL::POSITIVE) return 1;
       if (o == CGAL::NEGATIVE) return 3;
       if (CGAL::coplanar_orientation(a, b, c0, point(m, x.apex)) == CGAL::POSITIVE)
-        throw SurfaceError(source + ": facets " + std::to_string(list[0].facet) + " and " + std::to_string(x.facet) +
+        throw SurfaceError(source + ": facets " + std::to_string(orig[list[0].facet]) + " and " + std::to_string(orig[x.facet]) +
                                " overlap along their common edge",
-                           {list[0].facet, x.facet});
+                           {orig[list[0].facet], orig[x.facet]});
       return 2;  // the opposite half-plane
     };
     std::vector<std::pair<int, AtEdge>> sorted;
@@ -101,9 +126,9 @@ std::vector<SurfaceMesh> split_cells(const SurfaceMesh& m, const std::string& so
     for (std::size_t i = 0; i + 1 < sorted.size(); ++i)
       if (sorted[i].first == sorted[i + 1].first && (sorted[i].first == 1 || sorted[i].first == 3) &&
           CGAL::orientation(a, b, point(m, sorted[i].second.apex), point(m, sorted[i + 1].second.apex)) == CGAL::ZERO)
-        throw SurfaceError(source + ": facets " + std::to_string(sorted[i].second.facet) + " and " +
-                               std::to_string(sorted[i + 1].second.facet) + " overlap along their common edge",
-                           {sorted[i].second.facet, sorted[i + 1].second.facet});
+        throw SurfaceError(source + ": facets " + std::to_string(orig[sorted[i].second.facet]) + " and " +
+                               std::to_string(orig[sorted[i + 1].second.facet]) + " overlap along their common edge",
+                           {orig[sorted[i].second.facet], orig[sorted[i + 1].second.facet]});
     // The space between consecutive facets f, g (counter-clockwise) is on f's counter-clockwise
     // side and g's clockwise side. The counter-clockwise side of a facet is its normal's side
     // when it runs a -> b.
@@ -122,9 +147,9 @@ std::vector<SurfaceMesh> split_cells(const SurfaceMesh& m, const std::string& so
   for (std::uint32_t h = 0; h < 2 * nf; ++h) classes[uf.find(h)].push_back(h);
   for (std::uint32_t f = 0; f < nf; ++f)
     if (uf.find(2 * f) == uf.find(2 * f + 1))
-      throw SurfaceError(source + ": facet " + std::to_string(f) +
+      throw SurfaceError(source + ": facet " + std::to_string(orig[f]) +
                              " has the same region on both sides (a wall that divides nothing)",
-                         {f});
+                         {orig[f]});
   std::vector<SurfaceMesh> cells;
   std::size_t unbounded = 0;
   for (const auto& [root, sides] : classes) {

@@ -18,10 +18,12 @@ bool has_nonmanifold_edges(const SurfaceMesh& mesh);
 /// linked to the facing sides of its angular neighbours; each class of linked sides bounds one
 /// region of space. The bounded ones (positive volume) are the cells: each is returned as a
 /// closed surface oriented outward (its own points), in the order of their smallest facet id.
-/// A wall facet is in two cells, once each way. Throws SurfaceError (naming `source` and
-/// facets) when two facets overlap around an edge, when a facet has the same cell on both
-/// sides (a dangling fin), or when a cell holds another cell or a void (nested cells are not
-/// supported here: list such parts as separate bodies).
+/// A wall facet is in two cells, once each way; a wall written twice (the same corners, facing
+/// opposite ways: two touching parts exported into one file) counts once. Throws SurfaceError
+/// (naming `source` and facets) for duplicated facets facing the same way (Defect::duplicates),
+/// when two facets overlap around an edge, when a facet has the same cell on both sides (a
+/// dangling fin), or when a cell holds another cell or a void (nested cells are not supported
+/// here: list such parts as separate bodies). Facet ids in messages are the input's.
 std::vector<SurfaceMesh> split_cells(const SurfaceMesh& mesh, const std::string& source);
 
 }  // namespace kdmesh
