@@ -39,6 +39,22 @@ bool same_cycle(const std::array<std::uint32_t, 3>& a, const std::array<std::uin
   return false;
 }
 
+/// The largest of `distance` over 7 sample points of the triangle (centroid, edge midpoints,
+/// and the midpoints between the centroid and the corners): the check's face-distance measure.
+template <class Distance>
+double worst_sample(const double* p0, const double* p1, const double* p2, const Distance& distance) {
+  static constexpr double kBary[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0.5, 0}, {0, 0.5, 0.5},
+                                         {0.5, 0, 0.5}, {2.0 / 3, 1.0 / 6, 1.0 / 6},
+                                         {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
+  double worst = 0;
+  for (auto& w : kBary) {
+    double s[3];
+    for (int q = 0; q < 3; ++q) s[q] = w[0] * p0[q] + w[1] * p1[q] + w[2] * p2[q];
+    worst = std::max(worst, distance(s));
+  }
+  return worst;
+}
+
 }  // namespace
 
 bool MeshCheck::only_sizing_failures() const {
@@ -231,12 +247,9 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
   // ---- boundary faces within tolerance: 7 sample points per face, distance / h(centroid) ----
   std::vector<double> fdist(bnd.size());
   parallel_for(bnd.size(), [&](std::size_t b, std::size_t e, unsigned) {
-    static constexpr double kBary[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0.5, 0}, {0, 0.5, 0.5},
-                                           {0.5, 0, 0.5}, {2.0 / 3, 1.0 / 6, 1.0 / 6},
-                                           {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
     for (std::size_t k = b; k < e; ++k) {
       const double *p0 = pts.p(bnd[k][0]), *p1 = pts.p(bnd[k][1]), *p2 = pts.p(bnd[k][2]);
-      double worst = 0, cen[3];
+      double cen[3];
       for (int q = 0; q < 3; ++q) cen[q] = (p0[q] + p1[q] + p2[q]) / 3;
       // All three corners within on_surface of one facet their nodes record: the whole face is.
       double bound = std::numeric_limits<double>::infinity();
@@ -249,11 +262,7 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
         fdist[k] = bound / sizing(cen);
         continue;
       }
-      for (auto& w : kBary) {
-        double s[3];
-        for (int q = 0; q < 3; ++q) s[q] = w[0] * p0[q] + w[1] * p1[q] + w[2] * p2[q];
-        worst = std::max(worst, query.distance(s));
-      }
+      const double worst = worst_sample(p0, p1, p2, [&](const double* x) { return query.distance(x); });
       fdist[k] = worst / sizing(cen);
     }
   }, 256);
@@ -349,18 +358,11 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
       c.failures.push_back(std::to_string(c.offinterface_vertices) +
                            " interface vertex(es) off the interfaces (> 1e-9 x bbox diagonal), e.g." + vx.str());
     parallel_for(ifc.size(), [&](std::size_t b, std::size_t e, unsigned) {
-      static constexpr double kBary[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0.5, 0}, {0, 0.5, 0.5},
-                                             {0.5, 0, 0.5}, {2.0 / 3, 1.0 / 6, 1.0 / 6},
-                                             {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
       for (std::size_t k = b; k < e; ++k) {
         const double *p0 = pts.p(ifc[k][0]), *p1 = pts.p(ifc[k][1]), *p2 = pts.p(ifc[k][2]);
-        double worst = 0, cen[3];
+        double cen[3];
         for (int q = 0; q < 3; ++q) cen[q] = (p0[q] + p1[q] + p2[q]) / 3;
-        for (auto& w : kBary) {
-          double s[3];
-          for (int q = 0; q < 3; ++q) s[q] = w[0] * p0[q] + w[1] * p1[q] + w[2] * p2[q];
-          worst = std::max(worst, rq->interfaces().distance(s));
-        }
+        const double worst = worst_sample(p0, p1, p2, [&](const double* x) { return rq->interfaces().distance(x); });
         idist[k] = worst / sizing(cen);
       }
     }, 256);
