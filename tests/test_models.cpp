@@ -20,8 +20,15 @@ namespace {
 // doubled the gearbox kept its 0.66 mm curvature sizes, ~130k nodes, and timed out at 600 s;
 // with everything doubled it took 223 s here beside other work, too close to that limit.)
 constexpr double kSizeFactor = 3.0;
+// The assembly's imprinting runs on exact arithmetic (GMP), which ASan slows far more than the
+// rest: the five-body gear box took over 19 min here (CTest's limit is 10). Under the
+// sanitizers the gear box job meshes gearbox.stl instead (housing and gear apart, the same
+// zones), as before issue 21; the assembly code runs under them in test_mesh_bodies, and the
+// assembly itself in the Release stage.
+constexpr bool kAssembly = false;
 #else
 constexpr double kSizeFactor = 1.0;
+constexpr bool kAssembly = true;
 #endif
 
 const std::string kModels = std::string(KDMESH_SOURCE_DIR) + "/models/";
@@ -37,6 +44,10 @@ MeshJob shipped_job(const std::string& name) {
       job.inp.clear();
       job.medit.clear();
       job.boundary_vtu.clear();
+      if (!kAssembly && !job.bodies.empty()) {
+        job.bodies.clear();
+        job.input = kModels + "gearbox/gearbox.stl";
+      }
       job.sizing.max_size *= kSizeFactor;
       for (SizingZone& z : job.sizing.zones) z.size *= kSizeFactor;
       job.curvature_angle *= kSizeFactor;
@@ -73,6 +84,10 @@ void expect_fe_domain(const nlohmann::json& s, std::size_t bodies) {
 // the tolerance) and meeting the quality targets of the FE-ready work.
 TEST(Models, GearboxDefaultIsAValidFeDomain) {
   const MeshJobResult r = run_mesh_job(shipped_job("gearbox"));
+  if (!kAssembly) {
+    expect_fe_domain(r.summary, 2);  // housing and gear (gearbox.stl)
+    return;
+  }
   expect_fe_domain(r.summary, 5);  // housing, shaft, gear, two bearing rings
   const auto& c = r.summary.at("mesh_check");
   EXPECT_GT(c.at("interface_faces").get<std::size_t>(), 0u);
