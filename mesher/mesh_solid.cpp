@@ -325,6 +325,7 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
     counts.steiner_points = ms.steiner_points;
     counts.dropped_nodes = ms.dropped_nodes;
     counts.buried_nodes = ms.buried_nodes;
+    counts.interface_slivers = ms.interface_slivers;
     counts.steiner_rounds = ms.rounds;
     counts.refinements = attempt;
     report.has_mesh = true;

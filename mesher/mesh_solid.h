@@ -117,6 +117,7 @@ struct MeshReport {
     std::size_t feature_edges = 0, feature_corners = 0, placed_nodes = 0, nodes = 0;
     std::array<std::size_t, 4> nodes_by_kind{};  ///< corner, edge, surface, interior
     std::size_t steiner_points = 0, dropped_nodes = 0, buried_nodes = 0, tets = 0, boundary_faces = 0;
+    std::size_t interface_slivers = 0;  ///< flat tets on interfaces split by a Steiner point
     int steiner_rounds = 0, refinements = 0;
     std::size_t patches = 0, curves = 0, mesh_feature_edges = 0;  ///< with fe_groups
   };

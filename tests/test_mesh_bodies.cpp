@@ -13,9 +13,14 @@
 #include <string>
 #include <vector>
 
+#include "core/rng.h"
 #include "mesher/mesh_solid.h"
+#include "mesher/quality/mesh_check.h"
+#include "mesher/surface/region_query.h"
 #include "mesher/surface/surface_bodies.h"
 #include "mesher/surface/surface_cells.h"
+#include "mesher/tet_quality.h"
+#include "mesher/volume/volume_mesh.h"
 #include "tests/support/box_surface.h"
 
 namespace kdmesh {
@@ -369,6 +374,66 @@ TEST(MeshBodies, BadBodyListsAreUsageErrors) {
                UsageError);
   EXPECT_THROW(mesh_solid(two("a", box_surface({0, 0, 0}, {1, 1, 1}), "a", box_surface({2, 0, 0}, {3, 1, 1})), params(0.3)),
                UsageError);
+}
+
+// Regression (paper-size gear box, shaft | gear interface: boundary recovery failed twice with
+// outer-boundary faces inside the gear's bore). Interface nodes that are coplanar and
+// cocircular up to rounding (a square lattice on a planar interface facet whose coordinates
+// are rounded: the cylinders' facet strips) make flat Delaunay tets of four interface nodes.
+// They used to be classified outside like flat tets on the outer surface, leaving holes inside
+// the solid; they lie inside, on the interface, and are split by a Steiner point on it.
+// Here: boxes [0,1]^3 and [1,2]x[0,1]^2, nodes on a lattice of spacing 0.1, those of the
+// interface x = 1 one ulp off it at random.
+TEST(MeshBodies, FlatTetsOfInterfaceNodesAreSplitNotCarvedOut) {
+  std::vector<PreparedSurface> parts;
+  parts.push_back(prepare_surface(box_surface({0, 0, 0}, {1, 1, 1}), "a.stl"));
+  parts.push_back(prepare_surface(box_surface({1, 0, 0}, {2, 1, 1}), "b.stl"));
+  const PreparedSurface s = join_bodies(std::move(parts), {"a", "b"}, {"a.stl", "b.stl"});
+  ASSERT_FALSE(s.interfaces.empty());
+  const SurfaceQuery q(s.mesh);
+  const RegionQuery rq(s);
+  SizingOptions so;
+  so.max_size = 0.1;
+  const SizingField sizing = build_sizing_field(s.mesh, so);
+  const Domain domain{s, q, sizing, &rq};
+
+  NodeSet nodes;
+  Rng rng(7);
+  const int m = 10;
+  const double h = 1.0 / m;
+  for (int i = 0; i <= 2 * m; ++i)
+    for (int j = 0; j <= m; ++j)
+      for (int k = 0; k <= m; ++k) {
+        double p[3] = {i * h, j * h, k * h};
+        const bool outer = i == 0 || i == 2 * m || j == 0 || j == m || k == 0 || k == m;
+        if (outer) {
+          double cp[3];
+          std::uint32_t facet = kNoFacet;
+          q.closest(p, cp, &facet);
+          nodes.push_back(p, NodeKind::surface, facet, float(h));
+        } else if (i == m) {
+          p[0] = std::nextafter(1.0, rng.uniform() < 0.5 ? 0.0 : 2.0);
+          nodes.push_back(p, NodeKind::surface, kNoFacet, float(h));
+        } else {
+          for (double& x : p) x += rng.uniform(-0.15, 0.15) * h;
+          nodes.push_back(p, NodeKind::interior, kNoFacet, float(h));
+        }
+      }
+  const VolumeMesh vm = mesh_volume(domain, nodes);
+  EXPECT_GT(vm.stats.interface_slivers, 0u);  // the case arose
+  const MeshCheck c = check_volume_mesh(vm, domain);
+  std::string why;
+  for (const std::string& f : c.failures) why += f + "\n";
+  EXPECT_TRUE(c.ok()) << why;
+  EXPECT_EQ(c.straddling_tets, 0u);
+  EXPECT_NEAR(c.mesh_volume, 2.0, 1e-9);
+  double min_volume = 1;
+  for (std::size_t t = 0; t < vm.num_tets(); ++t) {
+    const std::uint32_t* v = &vm.tets[4 * t];
+    min_volume = std::min(min_volume, std::abs(volume_length(vm.nodes.points.p(v[0]), vm.nodes.points.p(v[1]),
+                                                             vm.nodes.points.p(v[2]), vm.nodes.points.p(v[3]))));
+  }
+  EXPECT_GT(min_volume, 1e-6);  // no flat tet is left
 }
 
 }  // namespace

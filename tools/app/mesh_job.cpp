@@ -271,6 +271,7 @@ nlohmann::json counts_json(const MeshReport& r) {
     j["steiner_points"] = c.steiner_points;
     j["dropped_nodes"] = c.dropped_nodes;
     j["buried_nodes"] = c.buried_nodes;
+    if (c.interface_facets > 0) j["interface_slivers"] = c.interface_slivers;
     j["steiner_rounds"] = c.steiner_rounds;
     j["refinements"] = c.refinements;
   }
