@@ -103,9 +103,7 @@ class ImproveTets {
   /// in body r (always true without region_query).
   bool region_ok(const std::uint32_t* ids, const double* const* p, std::uint32_t r) const {
     if (!region_query) return true;
-    int on_surface = 0;
-    for (int k = 0; k < 4; ++k) on_surface += nodes_->kind[ids[k]] != NodeKind::interior;
-    if (on_surface < 1) return true;
+    if (!has_surface_vertex(ids)) return true;
     double c[3];
     centroid(p, c);
     return region_query->region(c) == int(r);
@@ -114,12 +112,17 @@ class ImproveTets {
   /// true otherwise (and always when inside_query is not set).
   bool inside_ok(const std::uint32_t* ids, const double* const* p) const {
     if (!inside_query) return true;
-    int on_surface = 0;
-    for (int k = 0; k < 4; ++k) on_surface += nodes_->kind[ids[k]] != NodeKind::interior;
-    if (on_surface < 1) return true;
+    if (!has_surface_vertex(ids)) return true;
     double c[3];
     centroid(p, c);
     return inside_query->side(c) > 0;
+  }
+  /// Some vertex of tet ids is not interior-kind: the tets inside_ok, inside_ok_moved and
+  /// region_ok test.
+  bool has_surface_vertex(const std::uint32_t* ids) const {
+    for (int k = 0; k < 4; ++k)
+      if (nodes_->kind[ids[k]] != NodeKind::interior) return true;
+    return false;
   }
   /// The centroid as inside_ok computes it (one formula, so a marked centroid is recomputed
   /// bit for bit).
@@ -135,9 +138,7 @@ class ImproveTets {
     if (!inside_query) return true;
     const std::uint32_t* ids = v(t);
     const double* p[4] = {this->p(ids[0]), this->p(ids[1]), this->p(ids[2]), this->p(ids[3])};
-    int on_surface = 0;
-    for (int k = 0; k < 4; ++k) on_surface += nodes_->kind[ids[k]] != NodeKind::interior;
-    if (on_surface < 1) return true;
+    if (!has_surface_vertex(ids)) return true;
     double c0[3], c1[3];
     centroid(p, c0);
     p[iv] = x;
