@@ -285,7 +285,9 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
     po.seed = params.seed;
     po.interface_feature_angle = options.feature_angle_deg;
     po.progress = job.progress();
-    NodeSet nodes = place_nodes({surface, query, m.sizing, regions}, features, po);
+    PlacementStats ps;
+    NodeSet nodes = place_nodes({surface, query, m.sizing, regions}, features, po, &ps);
+    if (regions) report.interface_stages["place"] += ps.interface_seconds;
     job.add_seconds("place", clock.seconds());
     report.counts.placed_nodes = nodes.points.size();
 
@@ -320,6 +322,10 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
     report.mesh_stages["first_delaunay"] = ms.delaunay.seconds;
     report.mesh_stages["classify"] = ms.classify_seconds;
     report.mesh_stages["recover"] = ms.recover_seconds;
+    if (regions) {
+      report.mesh_stages["interfaces"] = ms.interface_seconds;
+      report.interface_stages["regions"] += ms.interface_seconds;
+    }
     MeshReport::Counts& counts = report.counts;
     count_mesh(m.mesh, counts);
     counts.steiner_points = ms.steiner_points;
@@ -347,6 +353,7 @@ Meshed mesh_with_refinement(const Job& job, const PreparedSurface& surface, cons
     job.log("checking the mesh");
     m.check = check_volume_mesh(m.mesh, {surface, query, m.sizing, regions}, params.check);
     job.add_seconds("mesh_check", clock.seconds());
+    if (regions) report.interface_stages["check"] += m.check.interface_seconds;
     if (kept && !m.check.ok() && (!m.check.only_sizing_failures() || attempt >= params.max_refinements))
       return kept->restore(job, "its mesh check failed");
     if (m.check.ok() && report.improve) {
@@ -420,7 +427,9 @@ PreparedSurface prepare(const Job& job, std::vector<NamedSurface> bodies, bool n
       names.push_back(b.name);
       inputs.push_back(b.input);
     }
+    Stopwatch imprint;
     surface = join_bodies(std::move(parts), names, inputs);
+    if (!surface.interfaces.empty()) report.interface_stages["imprint"] = imprint.seconds();
   }
   report.seconds["prepare"] = clock.seconds();
   report.counts.surface_points = surface.mesh.points.size();
@@ -536,8 +545,11 @@ FeMesh fe_groups(const Job& job, const PreparedSurface& surface, const SurfaceQu
   for (const MeshReport::Body& b : report.bodies) go.body_names.push_back(b.name);
   FeMesh fe = make_fe_mesh(mesh, bg, make_groups(params.groups, surface.mesh, patches, params.sizing.zones,
                                                  surface.num_bodies, go));
-  if (!go.body_names.empty())  // named bodies: their exteriors and interfaces
+  if (!go.body_names.empty()) {  // named bodies: their exteriors and interfaces
+    Stopwatch bg_clock;
     add_body_groups(fe, mesh, std::uint32_t(patches.num_patches), go.body_names);
+    if (!surface.interfaces.empty()) report.interface_stages["groups"] = bg_clock.seconds();
+  }
   if (params.element_order == 2) {
     job.log("quadratic elements");
     report.quadratic = make_quadratic(fe, surface.mesh, query, patches);

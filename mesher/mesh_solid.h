@@ -147,6 +147,11 @@ struct MeshReport {
   std::map<std::string, double> seconds;
   /// The volume mesher's own stages (order, delaunay, first_delaunay, classify, recover).
   std::map<std::string, double> mesh_stages;
+  /// Touching bodies: the seconds of the work interfaces add, inside the stages above, summed
+  /// over attempts: imprint (joining the bodies, in prepare), place (sampling the interfaces and
+  /// the fill's combined surface), regions (tet regions and the faces between them judged, in
+  /// mesh), check (the interface faces' checks, in mesh_check) and groups (body groups).
+  std::map<std::string, double> interface_stages;
   std::vector<std::string> notices;
   /// Named bodies (mesh_solid on a list of them), one per region, in region order: the solid's
   /// volume, the mesh's volume and tets in that region (filled with the mesh check), and the

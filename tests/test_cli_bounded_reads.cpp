@@ -10,6 +10,7 @@
 #include <string>
 
 #include "tests/support/run_cli.h"
+#include "tests/support/sanitizer.h"
 
 namespace {
 
@@ -22,7 +23,7 @@ fs::path tmpdir() { return kdmesh::test::process_tmpdir("cli_bounded_reads"); }
 /// blocks or grows without bound fails the test instead of hanging or exhausting the machine.
 /// (Not the address-space limit under AddressSanitizer, which reserves terabytes of it.)
 CliResult kdmesh(const std::string& args) {
-#if defined(__SANITIZE_ADDRESS__)
+#if KDMESH_UNDER_ASAN
   return kdmesh::test::run_kdmesh(args, tmpdir(), "timeout -s KILL 20");
 #else
   return kdmesh::test::run_kdmesh(args, tmpdir(), "ulimit -v 4000000; timeout -s KILL 20");

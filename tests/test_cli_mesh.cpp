@@ -16,6 +16,7 @@
 #include "io/msh_reader.h"
 #include "io/surface_io.h"
 #include "tests/support/run_cli.h"
+#include "tests/support/sanitizer.h"
 #include "tools/app/mesh_job.h"
 #include "tests/support/tetgen.h"
 
@@ -188,6 +189,22 @@ TEST(CliMesh, BodiesAreNamedRegionsTouchingOnesShareAnInterfaceOverlappingOnesAr
   EXPECT_EQ(t["mesh_check"]["straddling_tets"], 0);
   EXPECT_GT(t["counts"]["interface_facets"].get<int>(), 0);
   for (int k = 0; k < 2; ++k) EXPECT_NEAR(t["bodies"][k]["mesh_volume"].get<double>(), 1000.0, 1e-6);
+  EXPECT_EQ(t["counts"]["interface_slivers"], 0);
+  // The interfaces' own work, timed inside the stages: each part within its stage, the sum
+  // within the job's time.
+  const auto& sec = t["seconds"];
+  const auto& is = sec["interface_stages"];
+  ASSERT_TRUE(is.is_object()) << sec.dump();
+  EXPECT_LE(is["imprint"].get<double>(), sec["prepare"].get<double>());
+  EXPECT_LE(is["place"].get<double>(), sec["place"].get<double>());
+  EXPECT_LE(is["regions"].get<double>(), sec["mesh"].get<double>());
+  EXPECT_LE(is["check"].get<double>(), sec["mesh_check"].get<double>());
+  EXPECT_LE(is["groups"].get<double>(), sec["groups"].get<double>());
+  EXPECT_NEAR(is["total"].get<double>(),
+              is["imprint"].get<double>() + is["place"].get<double>() + is["regions"].get<double>() +
+                  is["check"].get<double>() + is["groups"].get<double>(), 1e-9);
+  EXPECT_LE(is["total"].get<double>(), sec["total"].get<double>());
+  EXPECT_FALSE(j["seconds"].contains("interface_stages"));  // apart: no interfaces
   const std::string touch_deck = slurp(touch_inp);
   EXPECT_NE(touch_deck.find("NAME=left-next"), std::string::npos);
   EXPECT_NE(touch_deck.find("NAME=left-exterior"), std::string::npos);
@@ -447,7 +464,7 @@ TEST(CliBatch, CrashedJobIsIsolatedAndLeavesNoTemporaries) {
   EXPECT_EQ(j["jobs"][0]["job"], "big");
   EXPECT_EQ(j["jobs"][0]["status"], "failed");
   const std::string message = j["jobs"][0]["error"]["message"];
-#ifdef __SANITIZE_ADDRESS__
+#if KDMESH_UNDER_ASAN
   // Under AddressSanitizer its SEGV handler catches the signal, reports, and then aborts or
   // exits with status 1 (by ASAN_OPTIONS): the job is lost all the same.
   EXPECT_TRUE(message.find("crashed: killed by signal") != std::string::npos ||

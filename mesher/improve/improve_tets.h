@@ -106,7 +106,7 @@ class ImproveTets {
     if (!has_surface_vertex(ids)) return true;
     double c[3];
     centroid(p, c);
-    return region_query->region(c) == int(r);
+    return region_query->in_body(c, r);
   }
   /// False when ids (with positions p) form such a tet with its centroid not strictly inside;
   /// true otherwise (and always when inside_query is not set).
@@ -147,7 +147,7 @@ class ImproveTets {
       if (inside_known_[t] && !inside_query->box_may_touch(c0, c1) &&
           !region_query->interfaces().box_may_touch(c0, c1))
         return true;
-      return region_query->region(c1) == int(region_[t]);
+      return region_query->in_body(c1, region_[t]);
     }
     if (inside_known_[t] && !inside_query->box_may_touch(c0, c1)) return true;
     return inside_query->side(c1) > 0;

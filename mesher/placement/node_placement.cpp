@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/timer.h"
 #include "mesher/placement/edge_sampling.h"
 #include "mesher/placement/interior_fill.h"
 #include "mesher/placement/spacing_grid.h"
@@ -42,7 +43,7 @@ constexpr double kInteriorBeta = 0.75;
 }  // namespace
 
 NodeSet place_nodes(const Domain& domain, const FeatureEdges& features,
-                    const PlacementOptions& options) {
+                    const PlacementOptions& options, PlacementStats* stats) {
   const PreparedSurface& surface = domain.surface;
   const SurfaceQuery& query = domain.query;
   const SizingField& sizing = domain.sizing;
@@ -100,6 +101,7 @@ NodeSet place_nodes(const Domain& domain, const FeatureEdges& features,
   // the outer surface's feature nodes), and the interior keeps clear of them too. The fill
   // sees one surface: the outer facets, then each interface facet in both orientations (the
   // pair leaves the ray parity of the union unchanged), ids n_outer + f and n_outer + n_ifc + f.
+  Stopwatch interface_clock;
   const std::size_t n_outer = mesh.num_tris(), n_ifc = ifc.mesh.num_tris(), first = nodes.size_count();
   const FeatureEdges inner =
       detect_sharp_edges(ifc.mesh, 0, interface_inner_edges(surface, options.interface_feature_angle));
@@ -115,6 +117,7 @@ NodeSet place_nodes(const Domain& domain, const FeatureEdges& features,
     }
   for (std::size_t i = first; i < nodes.size_count(); ++i) nodes.facet[i] += std::uint32_t(n_outer);
   const SurfaceQuery all_query(all);
+  if (stats) stats->interface_seconds += interface_clock.seconds();
   io.two_sided_from = std::uint32_t(n_outer);
   fill_interior(all, lo, hi, all_query, sizing, io, grid, nodes, [&](double f) { progress("interior", f); });
   // Interface nodes name no facet of the outer surface.

@@ -24,11 +24,16 @@ struct PlacementOptions {
   std::function<void(const std::string&, double)> progress;
 };
 
+/// What place_nodes measured.
+struct PlacementStats {
+  double interface_seconds = 0;  ///< touching bodies: sampling the interfaces, the fill's combined surface
+};
+
 /// Places nodes spaced as `domain.sizing` asks: feature corners, then nodes along feature edges,
 /// then on the surface facets, then in the interior. Every surface node lies exactly on its
 /// facet (up to rounding of its coordinates); interior nodes are strictly inside the solid.
 /// Deterministic for equal inputs and seed.
 NodeSet place_nodes(const Domain& domain, const FeatureEdges& features,
-                    const PlacementOptions& options = {});
+                    const PlacementOptions& options = {}, PlacementStats* stats = nullptr);
 
 }  // namespace kdmesh

@@ -11,6 +11,7 @@
 #include <limits>
 #include <sstream>
 
+#include "core/timer.h"
 #include "core/triangle_distance.h"
 #include "mesher/parallel_for.h"
 #include "mesher/delaunay/predicates.h"
@@ -106,8 +107,11 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
       else if (volume_length(a, bb, cc, d) < kZeroVolumeLength) bad_orient[t] = 2;  // zero volume
       double m[3];
       for (int k = 0; k < 3; ++k) m[k] = (a[k] + bb[k] + cc[k] + d[k]) / 4;
-      if (query.side(m) != 1) outside[t] = 1;
-      else if (rq && mesh.tet_region.size() == nt && rq->region(m) != int(mesh.tet_region[t])) straddles[t] = 1;
+      // In its region's body (one inside test): inside the solid and on the right side of every
+      // interface. Otherwise, outside or across an interface.
+      const bool home = rq && regions && rq->in_body(m, mesh.tet_region[t]);
+      if (!home && query.side(m) != 1) outside[t] = 1;
+      else if (!home && rq && regions) straddles[t] = 1;
       const double u[3] = {bb[0] - a[0], bb[1] - a[1], bb[2] - a[2]};
       const double x[3] = {cc[0] - a[0], cc[1] - a[1], cc[2] - a[2]};
       const double y[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
@@ -341,6 +345,7 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
   }
 
   // ---- interfaces: their vertices on them, their faces within tolerance (7 samples) ----
+  Stopwatch interface_clock;
   c.interface_faces = ifc.size();
   std::vector<double> idist(ifc.size());
   if (rq && !ifc.empty()) {
@@ -380,6 +385,7 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
       c.failures.push_back(std::to_string(c.offinterface_faces) + " interface face(s) farther than " +
                            std::to_string(options.hausdorff_tolerance) + " h from the interfaces, e.g." + ex.str());
   }
+  c.interface_seconds = interface_clock.seconds();
 
   // ---- volume ----
   c.volume_error = surface.volume != 0 ? std::fabs(c.mesh_volume - surface.volume) / std::fabs(surface.volume)

@@ -31,6 +31,7 @@ struct MeshCheck {
   /// tolerance from them.
   std::size_t interface_faces = 0, straddling_tets = 0, offinterface_vertices = 0, offinterface_faces = 0;
   double max_interface_hausdorff = 0;    ///< max over interface faces of (distance / local h)
+  double interface_seconds = 0;          ///< the interface faces' checks
   double volume_error = 0;               ///< |mesh - solid| / solid
   bool volume_off = false;               ///< volume_error beyond the tolerance
   std::vector<std::string> failures;     ///< one line per failed property, naming examples

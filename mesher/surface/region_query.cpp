@@ -39,4 +39,11 @@ int RegionQuery::region(const double* p) const {
   return kOutside;
 }
 
+bool RegionQuery::in_body(const double* p, std::uint32_t r) const {
+  if (r >= body_.size()) return false;
+  const std::array<double, 6>& b = box_[r];
+  if (p[0] < b[0] || p[1] < b[1] || p[2] < b[2] || p[0] > b[3] || p[1] > b[4] || p[2] > b[5]) return false;
+  return body_[r]->side(p) > 0;
+}
+
 }  // namespace kdmesh

@@ -28,6 +28,9 @@ class RegionQuery {
   /// The body whose solid holds p strictly, kOnSurface when p is on a body's surface, else
   /// kOutside.
   int region(const double* p) const;
+  /// True when body r holds p strictly: region(p) == r, with one inside test instead of one per
+  /// body before r (the bodies are checked not to overlap when they are joined).
+  bool in_body(const double* p, std::uint32_t r) const;
   /// The interface facets (distance, closest point; facet ids of surface.interfaces.mesh).
   const SurfaceQuery& interfaces() const { return *interfaces_; }
   /// The two bodies interface facet f lies between (behind, in front).

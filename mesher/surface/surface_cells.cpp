@@ -98,7 +98,9 @@ std::vector<SurfaceMesh> split_cells(const SurfaceMesh& input, const std::string
   const std::size_t nf = m.num_tris();
   // Side s of facet f (0: the side its normal points to, 1: the other) is half-facet 2 f + s.
   UnionFind uf(2 * nf);
-  for (auto& [edge, list] : edge_facets(m)) {
+  for (auto& entry : edge_facets(m)) {  // not a structured binding: the lambdas below use `list`
+    const auto& edge = entry.first;
+    auto& list = entry.second;
     const K::Point_3 a = point(m, edge.first), b = point(m, edge.second);
     if (list.size() == 1)
       throw SurfaceError(source + ": facet " + std::to_string(orig[list[0].facet]) + " has an open edge", {orig[list[0].facet]});

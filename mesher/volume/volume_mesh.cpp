@@ -832,9 +832,11 @@ VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes, const VolumeMeshOpti
     rf.flat = flat_inside_tets(dr.tri, nodes, inside);
     // Touching bodies: each tet's body, and the faces between bodies against the interfaces.
     if (domain.regions) {
+      Stopwatch ic;
       label = label_regions(dr.tri, nodes, domain, inside, &st.side_queries);
       rf.ifaces = interface_faces(dr.tri, label);
       rf.ij = judge_interfaces(rf.ifaces, dr.tri, label, nodes, domain, tolerance);
+      st.interface_seconds += ic.seconds();
     }
     if (rf.empty()) {
       st.recover_seconds += sw.seconds();

@@ -45,6 +45,7 @@ struct VolumeMeshStats {
   /// Summed over all rounds (the Delaunay / order time of the first round is delaunay.seconds).
   double order_seconds = 0, delaunay_seconds = 0, classify_seconds = 0, recover_seconds = 0;
   double region_seconds = 0;          ///< region flood fill and output compaction
+  double interface_seconds = 0;       ///< touching bodies: tet regions, faces between them judged
   double total_seconds = 0;           ///< all of mesh_volume
   std::size_t classified_tets = 0;    ///< tets classified, summed over rounds
   std::size_t side_queries = 0;       ///< exact inside/outside queries made by the classification

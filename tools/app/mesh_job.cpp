@@ -422,6 +422,13 @@ void add_report_json(const MeshReport& r, const FeMesh* fe, nlohmann::json& j) {
     for (const auto& [k, v] : r.mesh_stages) stages[k] = v;
     sec["mesh_stages"] = stages;
   }
+  if (!r.interface_stages.empty()) {
+    nlohmann::json stages = nlohmann::json::object();
+    double sum = 0;
+    for (const auto& [k, v] : r.interface_stages) stages[k] = v, sum += v;
+    stages["total"] = sum;
+    sec["interface_stages"] = stages;
+  }
   nlohmann::json notices = nlohmann::json::array();
   for (const std::string& n : r.notices) notices.push_back(n);
   j["notices"] = notices;
