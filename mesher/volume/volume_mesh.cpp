@@ -449,7 +449,6 @@ NodeSet rebuild_nodes(const NodeSet& nodes, const std::vector<std::uint8_t>& dro
   return out;
 }
 
-
 // ---------------------------------------------------------------------------------------------
 // Recovery. What one round asks for: interior nodes to drop (those on bad faces and in flat
 // tets), and candidate places for Steiner points on the surface or an interface.

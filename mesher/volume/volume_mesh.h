@@ -29,8 +29,8 @@ struct VolumeMeshStats {
   std::size_t input_nodes = 0;
   std::size_t steiner_points = 0;     ///< surface points added to recover the boundary
   std::size_t dropped_nodes = 0;      ///< interior nodes too close to the surface, removed
-  /// Flat tets of four interface nodes (touching bodies) split by a Steiner point on the
-  /// interface, summed over rounds.
+  /// Flat tets of four interface nodes kept inside the solid (touching bodies), each given a
+  /// Steiner point on the interface to split it, summed over rounds.
   std::size_t interface_slivers = 0;
   int rounds = 0;                     ///< Steiner rounds used
   int insert_rounds = 0;              ///< of those, rounds that inserted the Steiner points into the
