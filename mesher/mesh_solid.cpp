@@ -3,6 +3,7 @@
 #include "mesher/mesh_solid.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -618,17 +619,16 @@ MeshResult run(const Job& job, std::vector<NamedSurface> bodies, bool named) {
   report.has_check = true;
 
   clock.reset();
-  TetMesh tm = to_tet_mesh(m.mesh);
-  if (report.bodies.empty()) {
-    report.quality = summarize_quality(tm);
-  } else {  // and each body's extremes
-    std::vector<TetQuality> per_tet;
-    report.quality = summarize_quality(tm, &per_tet);
+  // One pass of per-tet measures: the writers' cell data, the summary and each body's extremes.
+  std::vector<std::array<double, 2>> dihedrals(report.bodies.empty() ? 0 : m.mesh.num_tets());  // min, max
+  TetMesh tm = to_tet_mesh(m.mesh, &report.quality, report.bodies.empty() ? TetQualityVisitor() :
+      [&](std::size_t t, const TetQuality& q) { dihedrals[t] = {q.min_dihedral, q.max_dihedral}; });
+  if (!report.bodies.empty()) {
     for (MeshReport::Body& b : report.bodies) b.min_dihedral = 180, b.max_dihedral = 0;
-    for (std::size_t t = 0; t < per_tet.size() && t < m.mesh.tet_region.size(); ++t) {
+    for (std::size_t t = 0; t < dihedrals.size() && t < m.mesh.tet_region.size(); ++t) {
       MeshReport::Body& b = report.bodies[m.mesh.tet_region[t]];
-      b.min_dihedral = std::min(b.min_dihedral, per_tet[t].min_dihedral);
-      b.max_dihedral = std::max(b.max_dihedral, per_tet[t].max_dihedral);
+      b.min_dihedral = std::min(b.min_dihedral, dihedrals[t][0]);
+      b.max_dihedral = std::max(b.max_dihedral, dihedrals[t][1]);
     }
   }
   report.size_fidelity = measure_size_fidelity(m.mesh.nodes.points, m.mesh.tets, m.sizing);

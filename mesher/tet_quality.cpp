@@ -107,43 +107,95 @@ TetQuality tet_quality(const double* a, const double* b, const double* c, const 
   return q;
 }
 
-QualitySummary summarize_quality(const TetMesh& mesh, std::vector<TetQuality>* per_tet) {
+namespace {
+
+/// The summary of a block of tets, before the means.
+struct Partial {
   QualitySummary s;
-  const std::size_t n = mesh.num_tets();
-  s.tets = n;
-  s.min_dihedral_hist = {0, 90, std::vector<std::uint64_t>(18, 0)};
-  s.radius_ratio_hist = {0, 1, std::vector<std::uint64_t>(10, 0)};
-  if (n == 0) return s;
-  std::vector<TetQuality> local;
-  std::vector<TetQuality>& q = per_tet ? *per_tet : local;
-  q.assign(n, TetQuality{});
-  parallel_for(n, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t t = b; t < e; ++t) {
-      const std::uint32_t* v = &mesh.tets[4 * t];
-      q[t] = tet_quality(mesh.points.p(v[0]), mesh.points.p(v[1]), mesh.points.p(v[2]),
-                         mesh.points.p(v[3]));
-    }
-  });
-  s.min_dihedral = 180;
-  s.max_dihedral = 0;
-  s.min_radius_ratio = std::numeric_limits<double>::infinity();
-  s.min_volume_length = std::numeric_limits<double>::infinity();
   double sum_rr = 0, sum_vl = 0;
-  for (const TetQuality& t : q) {
-    if (t.volume <= 0) ++s.inverted;
-    s.min_dihedral = std::min(s.min_dihedral, t.min_dihedral);
-    s.max_dihedral = std::max(s.max_dihedral, t.max_dihedral);
-    s.min_radius_ratio = std::min(s.min_radius_ratio, t.radius_ratio);
-    s.max_radius_edge = std::max(s.max_radius_edge, t.radius_edge);
-    s.min_volume_length = std::min(s.min_volume_length, t.volume_length);
-    sum_rr += t.radius_ratio;
-    sum_vl += t.volume_length;
-    add_to(s.min_dihedral_hist, t.min_dihedral);
-    add_to(s.radius_ratio_hist, t.radius_ratio);
+};
+
+Partial empty_partial() {
+  Partial p;
+  p.s.min_dihedral_hist = {0, 90, std::vector<std::uint64_t>(18, 0)};
+  p.s.radius_ratio_hist = {0, 1, std::vector<std::uint64_t>(10, 0)};
+  p.s.min_dihedral = 180;
+  p.s.max_dihedral = 0;
+  p.s.min_radius_ratio = std::numeric_limits<double>::infinity();
+  p.s.min_volume_length = std::numeric_limits<double>::infinity();
+  return p;
+}
+
+void add_tet(Partial& p, const TetQuality& t) {
+  QualitySummary& s = p.s;
+  if (t.volume <= 0) ++s.inverted;
+  s.min_dihedral = std::min(s.min_dihedral, t.min_dihedral);
+  s.max_dihedral = std::max(s.max_dihedral, t.max_dihedral);
+  s.min_radius_ratio = std::min(s.min_radius_ratio, t.radius_ratio);
+  s.max_radius_edge = std::max(s.max_radius_edge, t.radius_edge);
+  s.min_volume_length = std::min(s.min_volume_length, t.volume_length);
+  p.sum_rr += t.radius_ratio;
+  p.sum_vl += t.volume_length;
+  add_to(s.min_dihedral_hist, t.min_dihedral);
+  add_to(s.radius_ratio_hist, t.radius_ratio);
+}
+
+void merge(Partial& into, const Partial& p) {
+  QualitySummary &s = into.s;
+  const QualitySummary& o = p.s;
+  s.inverted += o.inverted;
+  s.min_dihedral = std::min(s.min_dihedral, o.min_dihedral);
+  s.max_dihedral = std::max(s.max_dihedral, o.max_dihedral);
+  s.min_radius_ratio = std::min(s.min_radius_ratio, o.min_radius_ratio);
+  s.max_radius_edge = std::max(s.max_radius_edge, o.max_radius_edge);
+  s.min_volume_length = std::min(s.min_volume_length, o.min_volume_length);
+  into.sum_rr += p.sum_rr;
+  into.sum_vl += p.sum_vl;
+  for (std::size_t b = 0; b < s.min_dihedral_hist.counts.size(); ++b)
+    s.min_dihedral_hist.counts[b] += o.min_dihedral_hist.counts[b];
+  for (std::size_t b = 0; b < s.radius_ratio_hist.counts.size(); ++b)
+    s.radius_ratio_hist.counts[b] += o.radius_ratio_hist.counts[b];
+}
+
+}  // namespace
+
+QualitySummary summarize_quality(const PointSet& points, const std::vector<std::uint32_t>& tets,
+                                 const TetQualityVisitor& each) {
+  const std::size_t n = tets.size() / 4;
+  constexpr std::size_t kBlock = 1 << 16;  // fixed: the sums' order is the same on any machine
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<Partial> part(blocks);
+  parallel_for(blocks, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t k = b; k < e; ++k) {
+      Partial p = empty_partial();
+      for (std::size_t t = k * kBlock; t < std::min(n, (k + 1) * kBlock); ++t) {
+        const std::uint32_t* v = &tets[4 * t];
+        const TetQuality q = tet_quality(points.p(v[0]), points.p(v[1]), points.p(v[2]), points.p(v[3]));
+        add_tet(p, q);
+        if (each) each(t, q);
+      }
+      part[k] = std::move(p);
+    }
+  }, 1);
+  Partial all = empty_partial();
+  for (const Partial& p : part) merge(all, p);
+  QualitySummary s = std::move(all.s);
+  s.tets = n;
+  if (n == 0) {  // the empty mesh's figures, as ever: zeros
+    s.min_dihedral = s.max_dihedral = s.min_radius_ratio = s.min_volume_length = 0;
+    return s;
   }
-  s.mean_radius_ratio = sum_rr / double(n);
-  s.mean_volume_length = sum_vl / double(n);
+  s.mean_radius_ratio = all.sum_rr / double(n);
+  s.mean_volume_length = all.sum_vl / double(n);
   return s;
+}
+
+QualitySummary summarize_quality(const TetMesh& mesh, std::vector<TetQuality>* per_tet) {
+  if (per_tet) per_tet->assign(mesh.num_tets(), TetQuality{});
+  return summarize_quality(mesh.points, mesh.tets, per_tet ? TetQualityVisitor([per_tet](std::size_t t, const TetQuality& q) {
+                                                    (*per_tet)[t] = q;
+                                                  })
+                                                : TetQualityVisitor());
 }
 
 }  // namespace kdmesh

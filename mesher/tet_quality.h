@@ -3,6 +3,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "core/tet_mesh.h"
@@ -54,7 +55,15 @@ struct QualitySummary {
   Histogram radius_ratio_hist;        ///< [0, 1], 10 bins
 };
 
-/// Per-tet measures (parallel over tets) and their summary.
+/// Called with each tet's index and measures, from several threads (each tet once).
+using TetQualityVisitor = std::function<void(std::size_t, const TetQuality&)>;
+
+/// Per-tet measures of the tets (4 ids each into `points`), parallel over tets and handed
+/// to `each` if set, and their summary. The sums run over fixed blocks of tets added in
+/// order, so the summary does not depend on the number of threads.
+QualitySummary summarize_quality(const PointSet& points, const std::vector<std::uint32_t>& tets,
+                                 const TetQualityVisitor& each = {});
+/// The same for a TetMesh, keeping every tet's measures in *per_tet if not null.
 QualitySummary summarize_quality(const TetMesh& mesh, std::vector<TetQuality>* per_tet = nullptr);
 
 }  // namespace kdmesh

@@ -6,11 +6,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <vector>
 #include <utility>
 
 #include "core/rng.h"
+#include "core/triangle_distance.h"
 #include "mesher/surface/surface_query.h"
 
 namespace kdmesh {
@@ -123,6 +125,49 @@ TEST(SurfaceQuery, SideIsExactAtEveryMagnitude) {
           wrong += q.side(p) != expected;
         }
     EXPECT_EQ(wrong, 0) << "cube of side 2^" << k;
+  }
+}
+
+/// Brute force: the least distance from x to any facet of s.
+double brute_distance(const SurfaceMesh& s, const double* x) {
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t f = 0; f < s.num_tris(); ++f)
+    best = std::min(best, triangle_distance(x, s.points.p(s.tri(f)[0]), s.points.p(s.tri(f)[1]),
+                                            s.points.p(s.tri(f)[2])));
+  return best;
+}
+
+// distance() searches the facet box grid near the surface and the AABB tree farther away:
+// both must give the least point-facet distance, near, far, outside the bounding box, on
+// a sphere of small facets and on a slab of long thin ones (boxes spanning many cells).
+TEST(SurfaceQuery, DistanceIsTheNearestFacetsNearAndFar) {
+  SurfaceMesh slab;  // a 100 x 1 x 1 box, each long face two triangles 100 long
+  for (int i = 0; i < 8; ++i) slab.points.push_back(i & 1 ? 100.0 : 0.0, i & 2 ? 1.0 : 0.0, i & 4 ? 1.0 : 0.0);
+  const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads) slab.tris.insert(slab.tris.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+  for (const SurfaceMesh& s : {sphere(10, 4), slab}) {
+    const SurfaceQuery q(s);
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    for (std::size_t v = 0; v < s.points.size(); ++v)
+      for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], s.points.p(v)[k]), hi[k] = std::max(hi[k], s.points.p(v)[k]);
+    Rng rng(11);
+    for (int i = 0; i < 3000; ++i) {
+      double x[3];
+      const double pad = i % 3 == 0 ? 0.01 : i % 3 == 1 ? 0.3 : 3.0;  // near the box, around it, far out
+      for (int k = 0; k < 3; ++k) {
+        const double span = hi[k] - lo[k];
+        x[k] = rng.uniform(lo[k] - pad * span, hi[k] + pad * span);
+      }
+      if (i % 5 == 0) {  // on or just off a facet: a random point of one
+        const std::uint32_t* t = s.tri(std::size_t(rng.uniform(0, double(s.num_tris()))) % s.num_tris());
+        const double u = rng.uniform(), w = rng.uniform() * (1 - u), off = i % 10 == 0 ? 0.0 : rng.uniform(-1e-3, 1e-3);
+        for (int k = 0; k < 3; ++k)
+          x[k] = s.points.p(t[0])[k] + u * (s.points.p(t[1])[k] - s.points.p(t[0])[k]) +
+                 w * (s.points.p(t[2])[k] - s.points.p(t[0])[k]) + off;
+      }
+      const double want = brute_distance(s, x);
+      ASSERT_NEAR(q.distance(x), want, 1e-12 * (1 + want)) << "point " << i << " of " << s.num_tris() << " facets";
+    }
   }
 }
 

@@ -14,6 +14,7 @@
 #include "core/timer.h"
 #include "core/triangle_distance.h"
 #include "mesher/parallel_for.h"
+#include "mesher/quality/centroid_sides.h"
 #include "mesher/delaunay/predicates.h"
 
 namespace kdmesh {
@@ -90,6 +91,19 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
     return c;
   }
 
+  // The faces, sorted by their vertex sets (matched below; the inside test uses the pairs).
+  static constexpr int kF[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  std::vector<Face> faces(4 * nt);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int i = 0; i < 4; ++i) {
+      Face& f = faces[4 * t + i];
+      for (int j = 0; j < 3; ++j) f.out[j] = mesh.tets[4 * t + kF[i][j]];
+      f.key = f.out;
+      std::sort(f.key.begin(), f.key.end());
+      f.tet = std::uint32_t(t);
+    }
+  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.key < b.key; });
+
   // ---- per tet: exact orientation, centroid inside, volume ----
   std::vector<std::uint8_t> bad_orient(nt, 0), outside(nt, 0), straddles(nt, 0);
   const RegionQuery* rq = domain.regions;
@@ -109,9 +123,11 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
       for (int k = 0; k < 3; ++k) m[k] = (a[k] + bb[k] + cc[k] + d[k]) / 4;
       // In its region's body (one inside test): inside the solid and on the right side of every
       // interface. Otherwise, outside or across an interface.
-      const bool home = rq && regions && rq->in_body(m, mesh.tet_region[t]);
-      if (!home && query.side(m) != 1) outside[t] = 1;
-      else if (!home && rq && regions) straddles[t] = 1;
+      // Without regions, the sides come from centroid_sides below.
+      if (rq && regions && !rq->in_body(m, mesh.tet_region[t])) {
+        if (query.side(m) != 1) outside[t] = 1;
+        else straddles[t] = 1;
+      }
       const double u[3] = {bb[0] - a[0], bb[1] - a[1], bb[2] - a[2]};
       const double x[3] = {cc[0] - a[0], cc[1] - a[1], cc[2] - a[2]};
       const double y[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
@@ -123,6 +139,17 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
     vol_part[w] += vol;
     for (std::size_t r = 0; r < nr; ++r) region_part[w * nr + r] += rv[r];
   }, 1024, 64);
+  if (!(rq && regions)) {
+    // One exact inside test per set of tets whose centroids are joined by clear segments.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+    pairs.reserve(2 * nt);
+    for (std::size_t i = 0; i + 1 < faces.size(); ++i)
+      if (faces[i].key == faces[i + 1].key && (i + 2 == faces.size() || faces[i + 2].key != faces[i].key) &&
+          (i == 0 || faces[i - 1].key != faces[i].key))
+        pairs.emplace_back(faces[i].tet, faces[i + 1].tet);
+    const std::vector<std::int8_t> side = centroid_sides(pts, mesh.tets, pairs, query);
+    for (std::size_t t = 0; t < nt; ++t) outside[t] = side[t] != 1;
+  }
   for (double v : vol_part) c.mesh_volume += v;
   c.region_volume.assign(nr, 0.0);
   for (std::size_t w = 0; w < 64; ++w)
@@ -155,17 +182,6 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
   }
 
   // ---- faces by matching: once = boundary, twice = interior (must be opposite), more = error ----
-  static constexpr int kF[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-  std::vector<Face> faces(4 * nt);
-  for (std::size_t t = 0; t < nt; ++t)
-    for (int i = 0; i < 4; ++i) {
-      Face& f = faces[4 * t + i];
-      for (int j = 0; j < 3; ++j) f.out[j] = mesh.tets[4 * t + kF[i][j]];
-      f.key = f.out;
-      std::sort(f.key.begin(), f.key.end());
-      f.tet = std::uint32_t(t);
-    }
-  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.key < b.key; });
   std::vector<std::array<std::uint32_t, 3>> bnd;  // outward
   std::vector<std::array<std::uint32_t, 3>> ifc;  // between two regions
   std::size_t overfull = 0, same_side = 0;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "mesher/parallel_for.h"
 
 namespace kdmesh {
 
@@ -15,52 +16,94 @@ SizeFidelity measure_size_fidelity(const PointSet& points, const std::vector<std
   if (tets.size() % 4 != 0)
     throw UsageError("size fidelity: tet array length " + std::to_string(tets.size()) +
                      " is not a multiple of 4");
-  const std::size_t np = points.size();
-  std::vector<std::uint64_t> edges;
-  edges.reserve(tets.size() / 4 * 6);
-  for (std::size_t t = 0; t < tets.size(); t += 4) {
-    for (int i = 0; i < 4; ++i) {
-      if (tets[t + i] >= np)
-        throw UsageError("size fidelity: tet " + std::to_string(t / 4) + " refers to point " +
-                         std::to_string(tets[t + i]) + " of " + std::to_string(np));
-      for (int j = i + 1; j < 4; ++j) {
-        std::uint32_t a = tets[t + i], b = tets[t + j];
-        if (a > b) std::swap(a, b);
-        edges.push_back(std::uint64_t(a) << 32 | b);
-      }
-    }
+  const std::size_t np = points.size(), nt = tets.size() / 4;
+  for (std::size_t k = 0; k < tets.size(); ++k)
+    if (tets[k] >= np)
+      throw UsageError("size fidelity: tet " + std::to_string(k / 4) + " refers to point " +
+                       std::to_string(tets[k]) + " of " + std::to_string(np));
+  // The unique edges (a < b), grouped by a: a counting sort on a, then each group sorted.
+  // The order is (a, b) ascending, as a sort of all the edges would give.
+  std::vector<std::uint32_t> start(np + 1, 0), other(6 * nt);
+  auto each_edge = [&](auto&& f) {
+    for (std::size_t t = 0; t < nt; ++t)
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) f(std::min(tets[4 * t + i], tets[4 * t + j]), std::max(tets[4 * t + i], tets[4 * t + j]));
+  };
+  each_edge([&](std::uint32_t a, std::uint32_t) { ++start[a + 1]; });
+  for (std::size_t v = 0; v < np; ++v) start[v + 1] += start[v];
+  {
+    std::vector<std::uint32_t> at(start.begin(), start.end() - 1);
+    each_edge([&](std::uint32_t a, std::uint32_t b) { other[at[a]++] = b; });
   }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  std::vector<std::uint32_t> unique_count(np);
+  parallel_for(np, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t v = b; v < e; ++v) {
+      const auto first = other.begin() + start[v], last = other.begin() + start[v + 1];
+      std::sort(first, last);
+      unique_count[v] = std::uint32_t(std::unique(first, last) - first);
+    }
+  }, 1024);
+  std::vector<std::uint32_t> from;  // each unique edge's a, in order
+  std::vector<std::uint32_t> to;
+  std::size_t ne = 0;
+  for (std::size_t v = 0; v < np; ++v) ne += unique_count[v];
+  from.reserve(ne);
+  to.reserve(ne);
+  for (std::size_t v = 0; v < np; ++v)
+    for (std::uint32_t k = 0; k < unique_count[v]; ++k) from.push_back(std::uint32_t(v)), to.push_back(other[start[v] + k]);
+  std::vector<std::uint32_t>().swap(other);
   SizeFidelity r;
-  r.edges = edges.size();
-  if (edges.empty()) return r;
-  double sum = 0, away_sum = 0;
-  std::size_t in = 0, lo = 0, hi = 0;
+  r.edges = ne;
+  if (ne == 0) return r;
   const double far = sizing.max_size();
   // The field is exactly h_max where nothing refines it (a min over terms that are all >= it).
-  const auto unrefined = [&](const double* x) { return !(sizing(x) < far); };
+  std::vector<std::uint8_t> unrefined(np);
+  parallel_for(np, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t v = b; v < e; ++v) unrefined[v] = !(sizing(points.p(std::uint32_t(v))) < far);
+  }, 1024);
+  // Fixed blocks of edges, summed in order: the same figures on any number of threads.
+  struct Part {
+    double sum = 0, away_sum = 0, min_ratio = INFINITY, max_ratio = 0;
+    std::size_t in = 0, lo = 0, hi = 0, away = 0;
+  };
+  constexpr std::size_t kBlock = 1 << 16;
+  std::vector<Part> part((ne + kBlock - 1) / kBlock);
+  parallel_for(part.size(), [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t k = b; k < e; ++k) {
+      Part p;
+      for (std::size_t i = k * kBlock; i < std::min(ne, (k + 1) * kBlock); ++i) {
+        const double* a = points.p(from[i]);
+        const double* c = points.p(to[i]);
+        const double m[3] = {(a[0] + c[0]) / 2, (a[1] + c[1]) / 2, (a[2] + c[2]) / 2};
+        const double length = std::hypot(c[0] - a[0], c[1] - a[1], c[2] - a[2]);
+        const double hm = sizing(m);
+        const double ratio = length / hm;
+        p.sum += ratio;
+        if (!(hm < far) && unrefined[from[i]] && unrefined[to[i]]) {
+          ++p.away;
+          p.away_sum += length / far;
+        }
+        if (ratio < 0.7) ++p.lo;
+        else if (ratio > 1.4) ++p.hi;
+        else ++p.in;
+        p.min_ratio = std::min(p.min_ratio, ratio);
+        p.max_ratio = std::max(p.max_ratio, ratio);
+      }
+      part[k] = p;
+    }
+  }, 1);
+  double sum = 0, away_sum = 0;
+  std::size_t in = 0, lo = 0, hi = 0;
   r.min_ratio = INFINITY;
   r.max_ratio = 0;
-  for (const std::uint64_t e : edges) {
-    const double* a = points.p(std::uint32_t(e >> 32));
-    const double* b = points.p(std::uint32_t(e));
-    const double m[3] = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
-    const double length = std::hypot(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
-    const double hm = sizing(m);
-    const double ratio = length / hm;
-    sum += ratio;
-    if (!(hm < far) && unrefined(a) && unrefined(b)) {
-      ++r.away_edges;
-      away_sum += length / far;
-    }
-    if (ratio < 0.7) ++lo;
-    else if (ratio > 1.4) ++hi;
-    else ++in;
-    r.min_ratio = std::min(r.min_ratio, ratio);
-    r.max_ratio = std::max(r.max_ratio, ratio);
+  for (const Part& p : part) {
+    sum += p.sum;
+    away_sum += p.away_sum;
+    in += p.in, lo += p.lo, hi += p.hi, r.away_edges += p.away;
+    r.min_ratio = std::min(r.min_ratio, p.min_ratio);
+    r.max_ratio = std::max(r.max_ratio, p.max_ratio);
   }
-  const double n = double(edges.size());
+  const double n = double(ne);
   r.mean_ratio = sum / n;
   r.in_range = double(in) / n;
   r.short_fraction = double(lo) / n;

@@ -38,6 +38,10 @@ class SurfaceQuery {
   /// comparisons). Then the segment ab does not meet the surface, so a and b lie strictly on
   /// the same side: a cheap way to carry a known side along a short move.
   bool box_may_touch(const double* a, const double* b) const;
+  /// True when the closed segment ab meets no closed facet (exact predicates; the facet box
+  /// grid first). Then a and b lie strictly on the same side: the way to carry a known side
+  /// between nearby points that box_may_touch cannot separate.
+  bool segment_clear(const double* a, const double* b) const;
 
  private:
   struct Impl;

@@ -879,7 +879,7 @@ VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes, const VolumeMeshOpti
   return out;
 }
 
-TetMesh to_tet_mesh(const VolumeMesh& mesh) {
+TetMesh to_tet_mesh(const VolumeMesh& mesh, QualitySummary* summary, const TetQualityVisitor& each) {
   TetMesh m;
   m.points = mesh.nodes.points;
   m.tets = mesh.tets;
@@ -899,15 +899,12 @@ TetMesh to_tet_mesh(const VolumeMesh& mesh) {
     region.ints[t] = t < mesh.tet_region.size() ? std::int32_t(mesh.tet_region[t]) : 0;
   dih.reals.resize(nt);
   rr.reals.resize(nt);
-  parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t t = b; t < e; ++t) {
-      const std::uint32_t* v = &mesh.tets[4 * t];
-      const TetQuality q = tet_quality(m.points.p(v[0]), m.points.p(v[1]), m.points.p(v[2]),
-                                       m.points.p(v[3]));
-      dih.reals[t] = q.min_dihedral;
-      rr.reals[t] = q.radius_ratio;
-    }
+  const QualitySummary s = summarize_quality(m.points, m.tets, [&](std::size_t t, const TetQuality& q) {
+    dih.reals[t] = q.min_dihedral;
+    rr.reals[t] = q.radius_ratio;
+    if (each) each(t, q);
   });
+  if (summary) *summary = s;
   m.cell_data.push_back(std::move(region));
   m.cell_data.push_back(std::move(dih));
   m.cell_data.push_back(std::move(rr));

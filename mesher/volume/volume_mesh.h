@@ -12,6 +12,7 @@
 #include "mesher/node_set.h"
 #include "mesher/order/order.h"
 #include "mesher/domain.h"
+#include "mesher/tet_quality.h"
 
 namespace kdmesh {
 
@@ -75,7 +76,9 @@ VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes,
                        const VolumeMeshOptions& options = {});
 
 /// The mesh as writers take it: points, tets, point data "node_kind" and "target_size",
-/// cell data "region", "min_dihedral", "radius_ratio".
-TetMesh to_tet_mesh(const VolumeMesh& mesh);
+/// cell data "region", "min_dihedral", "radius_ratio". The cell data's per-tet measures
+/// also give their summary (to *summary if not null) and go to `each` if set: one pass.
+TetMesh to_tet_mesh(const VolumeMesh& mesh, QualitySummary* summary = nullptr,
+                    const TetQualityVisitor& each = {});
 
 }  // namespace kdmesh

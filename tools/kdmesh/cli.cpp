@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <string>
 #include <iostream>
 
 namespace kdmesh::cli {
@@ -12,7 +13,11 @@ namespace kdmesh::cli {
 std::ostream& Output::human() const { return json ? std::cerr : std::cout; }
 
 void Output::stage(const std::string& msg) const {
-  if (!quiet) std::cerr << "kdmesh: " << msg << std::endl;
+  if (!quiet) std::cerr << ("kdmesh: " + msg + "\n") << std::flush;  // one write (print_error)
+}
+
+void print_error(const std::string& message, const char* what) {
+  std::cerr << ("kdmesh: " + std::string(what) + ": " + message + "\n") << std::flush;
 }
 
 std::function<void(double)> Output::progress(const std::string& what) const {

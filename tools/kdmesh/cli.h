@@ -30,6 +30,10 @@ CLI::Validator non_empty_path();
 /// Adds --json and --quiet to a subcommand.
 void add_output_flags(CLI::App* cmd, Output& out);
 
+/// "kdmesh: <what>: <message>" on stderr in one write: under mpirun, whose own messages go
+/// to the same stream, a line written piece by piece could be cut apart.
+void print_error(const std::string& message, const char* what = "error");
+
 using Runner = std::function<int()>;
 
 /// Each subcommand registers itself and sets `run` to its action when it is selected.

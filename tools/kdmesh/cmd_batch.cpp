@@ -128,7 +128,7 @@ int run_batch_as(const Options& o, const MpiWorld& world) {
   auto log = [&](const std::string& name, const std::string& msg) {
     if (out.quiet) return;
     std::lock_guard<std::mutex> lock(log_mutex);
-    std::cerr << "kdmesh: [" << name << "] " << msg << std::endl;
+    std::cerr << ("kdmesh: [" + name + "] " + msg + "\n") << std::flush;  // one write (print_error)
   };
 
   // Each job in its own process: a crash (a bug, the OOM killer) fails that job only.
@@ -195,7 +195,7 @@ int run_batch_as(const Options& o, const MpiWorld& world) {
   for (const MeshJobResult& r : results) j["jobs"].push_back(r.summary);
   out.emit_json(j);
   if (code != 0)
-    std::cerr << "kdmesh: error: " << failed << " of " << jobs.size() << " jobs failed" << std::endl;
+    print_error(std::to_string(failed) + " of " + std::to_string(jobs.size()) + " jobs failed");
   return code;
 }
 

@@ -83,7 +83,7 @@ int run_compare(const Options& o) {
   out.human() << format_comparison(c.report);
   out.emit_json(c.report);
   if (!c.ok()) {
-    std::cerr << "kdmesh: error: " << c.error << std::endl;
+    print_error(c.error);
     return int(c.code);
   }
   return 0;

@@ -28,7 +28,7 @@ int run_mesh(const Options& o) {
   out.human() << format_job_report(r.summary);
   out.emit_json(r.summary);
   if (!r.ok()) {
-    std::cerr << "kdmesh: error: " << r.summary["error"]["message"].get<std::string>() << std::endl;
+    print_error(r.summary["error"]["message"].get<std::string>());
     return int(r.code);
   }
   return 0;

@@ -30,13 +30,13 @@ int main(int argc, char** argv) {
   try {
     return run();
   } catch (const kdmesh::Error& e) {
-    std::cerr << "kdmesh: error: " << e.what() << std::endl;
+    kdmesh::cli::print_error(e.what());
     return int(e.code());
   } catch (const std::bad_alloc&) {
-    std::cerr << "kdmesh: error: out of memory" << std::endl;
+    kdmesh::cli::print_error("out of memory");
     return int(kdmesh::ExitCode::failure);
   } catch (const std::exception& e) {
-    std::cerr << "kdmesh: internal error: " << e.what() << std::endl;
+    kdmesh::cli::print_error(e.what(), "internal error");
     return int(kdmesh::ExitCode::failure);
   }
 }

@@ -1,0 +1,24 @@
+// kdmesh — the side of the surface of every tet's centroid, exact, with one inside test per
+// connected set of tets instead of one per tet.
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "core/point_set.h"
+#include "mesher/surface/surface_query.h"
+
+namespace kdmesh {
+
+/// +1 strictly inside, -1 strictly outside, 0 on the surface, for the centroid of every tet
+/// (4 ids each into `points`); the same answers as SurfaceQuery::side on each centroid.
+/// Two tets that share a face (a pair of `neighbours`) carry one side when the closed
+/// segment between their centroids meets no facet (SurfaceQuery::segment_clear, exact): the
+/// side of a closed surface changes only across it. So the tets fall into sets joined by
+/// clear segments, and each set costs one inside test, of its lowest tet.
+std::vector<std::int8_t> centroid_sides(const PointSet& points, const std::vector<std::uint32_t>& tets,
+                                        const std::vector<std::pair<std::uint32_t, std::uint32_t>>& neighbours,
+                                        const SurfaceQuery& query);
+
+}  // namespace kdmesh
