@@ -171,6 +171,34 @@ TEST(SurfaceQuery, DistanceIsTheNearestFacetsNearAndFar) {
   }
 }
 
+// segment_clear searches the facets near the cells a segment spans, or the tree for a long
+// one: a clear segment joins two points strictly on one side, and two points on different
+// sides are never joined by a clear segment.
+TEST(SurfaceQuery, ClearSegmentsJoinPointsOfOneSide) {
+  const SurfaceMesh s = sphere(10, 3);
+  const SurfaceQuery q(s);
+  Rng rng(5);
+  int clear = 0, crossing = 0, blocked_same_side = 0;
+  for (int i = 0; i < 20000; ++i) {
+    double a[3], b[3];
+    const double len = i % 3 == 0 ? 0.05 : i % 3 == 1 ? 1.0 : 20.0;  // few cells, some, many (the tree)
+    for (int k = 0; k < 3; ++k) a[k] = rng.uniform(-11, 11), b[k] = a[k] + rng.uniform(-len, len);
+    const int sa = q.side(a), sb = q.side(b);
+    if (q.segment_clear(a, b)) {
+      ASSERT_NE(sa, 0) << "segment " << i;
+      ASSERT_EQ(sa, sb) << "segment " << i;
+      ++clear;
+    } else if (sa != sb) {
+      ++crossing;
+    } else {
+      ++blocked_same_side;  // in and out again, or near a facet
+    }
+  }
+  EXPECT_GT(clear, 1000);
+  EXPECT_GT(crossing, 1000);
+  EXPECT_GT(blocked_same_side, 10);
+}
+
 TEST(SurfaceQuery, BoxesTouchingAtOnePointCount) {
   // A facet corner at (10, 0, 0): a segment ending exactly there, or whose box reaches that
   // coordinate from outside, must be reported (closed boxes).

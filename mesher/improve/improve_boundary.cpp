@@ -8,6 +8,7 @@
 
 #include "mesher/improve/improve_quality.h"
 #include "mesher/improve/improve_tets.h"
+#include "mesher/quality/face_samples.h"
 #include "sizing/segment_bvh.h"
 
 namespace kdmesh {
@@ -22,14 +23,11 @@ bool within_tube(const double* x, const double* a, const double* b, double len2)
 }  // namespace
 
 bool face_on_surface(const double* a, const double* b, const double* c, const BoundaryContext& ctx) {
-  static constexpr double kBary[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0.5, 0}, {0, 0.5, 0.5},
-                                         {0.5, 0, 0.5}, {2.0 / 3, 1.0 / 6, 1.0 / 6},
-                                         {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
   double cen[3];
   for (int q = 0; q < 3; ++q) cen[q] = (a[q] + b[q] + c[q]) / 3;
   const double limit = ctx.max_distance * (*ctx.sizing)(cen);
   const double* corner[3] = {a, b, c};  // on the surface: each bounds its samples' search
-  for (const auto& w : kBary) {
+  for (const auto& w : kFaceSamples) {  // the mesh check's samples
     double s[3];
     for (int q = 0; q < 3; ++q) s[q] = w[0] * a[q] + w[1] * b[q] + w[2] * c[q];
     const int near = int(std::max_element(w, w + 3) - w);

@@ -25,7 +25,7 @@ bool flip_valid(const ImproveTets& m, const FlipCandidate& c) {
   const std::vector<std::uint32_t>& fresh = c.fresh;
   for (std::size_t k = 0; k < fresh.size(); k += 4) {
     const double* p[4] = {m.p(fresh[k]), m.p(fresh[k + 1]), m.p(fresh[k + 2]), m.p(fresh[k + 3])};
-    if (!tet_valid(p[0], p[1], p[2], p[3]) || !m.inside_ok(&fresh[k], p)) return false;
+    if (!tet_valid(p[0], p[1], p[2], p[3]) || !m.inside_ok_replacing(&fresh[k], p, c.old)) return false;
   }
   return true;
 }

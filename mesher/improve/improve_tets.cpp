@@ -1,6 +1,7 @@
 // kdmesh — the mutable tet structure of the quality-improvement pass (mesher/improve/improve_tets.h).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "mesher/improve/improve_tets.h"
+#include "mesher/quality/centroid_sides.h"
 
 #include <algorithm>
 #include <array>
@@ -132,6 +133,28 @@ std::uint32_t ImproveTets::new_slot() {
 void ImproveTets::link_face(std::uint32_t t, int i, std::uint32_t ref) {
   ta_[4 * std::size_t(t) + i] = ref;
   if (ref != kImproveNone) ta_[ref] = 4 * t + std::uint32_t(i);
+}
+
+void ImproveTets::certify_inside() {
+  if (!inside_query || region_query) return;
+  const std::size_t nt = tv_.size() / 4;
+  std::vector<std::uint32_t> sub_of(nt, kImproveNone), slots, sub_tets;
+  for (std::uint32_t t = 0; t < nt; ++t)
+    if (v(t)[0] != kImproveNone && has_surface_vertex(v(t))) {
+      sub_of[t] = std::uint32_t(slots.size());
+      slots.push_back(t);
+      sub_tets.insert(sub_tets.end(), v(t), v(t) + 4);
+    }
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  for (std::uint32_t k = 0; k < slots.size(); ++k)
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t a = adj(slots[k], i);
+      if (a != kImproveNone && (a >> 2) > slots[k] && sub_of[a >> 2] != kImproveNone)
+        pairs.emplace_back(k, sub_of[a >> 2]);
+    }
+  const std::vector<std::int8_t> side = centroid_sides(nodes_->points, sub_tets, pairs, *inside_query);
+  for (std::size_t k = 0; k < slots.size(); ++k)
+    if (side[k] == 1) inside_known_[slots[k]] = 1;
 }
 
 bool ImproveTets::replace(const std::vector<std::uint32_t>& old,

@@ -117,6 +117,26 @@ class ImproveTets {
     centroid(p, c);
     return inside_query->side(c) > 0;
   }
+  /// inside_ok for a tet that replaces the tets `old`: a centroid joined by a segment meeting
+  /// no facet (exact) to the known-inside centroid of one of them is inside with no ray
+  /// parity query (the first known one is tried), else the query decides.
+  bool inside_ok_replacing(const std::uint32_t* ids, const double* const* p,
+                           const std::vector<std::uint32_t>& old) const {
+    if (!inside_query) return true;
+    if (!has_surface_vertex(ids)) return true;
+    double c[3];
+    centroid(p, c);
+    for (const std::uint32_t t : old) {
+      if (!inside_known_[t]) continue;
+      const std::uint32_t* o = v(t);
+      const double* q[4] = {this->p(o[0]), this->p(o[1]), this->p(o[2]), this->p(o[3])};
+      double c0[3];
+      centroid(q, c0);
+      if (inside_query->segment_clear(c0, c)) return true;
+      break;
+    }
+    return inside_query->side(c) > 0;
+  }
   /// Some vertex of tet ids is not interior-kind: the tets inside_ok, inside_ok_moved and
   /// region_ok test.
   bool has_surface_vertex(const std::uint32_t* ids) const {
@@ -131,9 +151,10 @@ class ImproveTets {
   }
 
   /// inside_ok for tet t with its vertex in slot iv moved to x. When t's current centroid is
-  /// known to be strictly inside (mark_inside), a move whose centroid path stays clear of every
-  /// facet's bounding box is accepted without the ray-parity query (exact: the side cannot
-  /// change along a segment that does not meet the surface).
+  /// known to be strictly inside (mark_inside), a move whose centroid path meets no facet
+  /// (SurfaceQuery::segment_clear: facet boxes first, then exact segment-facet tests) is
+  /// accepted without the ray-parity query (exact: the side cannot change along a segment
+  /// that does not meet the surface).
   bool inside_ok_moved(std::uint32_t t, int iv, const double* x) const {
     if (!inside_query) return true;
     const std::uint32_t* ids = v(t);
@@ -144,17 +165,21 @@ class ImproveTets {
     p[iv] = x;
     centroid(p, c1);
     if (region_query) {  // the region's body holds the union's points: one test for both
-      if (inside_known_[t] && !inside_query->box_may_touch(c0, c1) &&
-          !region_query->interfaces().box_may_touch(c0, c1))
+      if (inside_known_[t] && inside_query->segment_clear(c0, c1) && region_query->interfaces().segment_clear(c0, c1))
         return true;
       return region_query->in_body(c1, region_[t]);
     }
-    if (inside_known_[t] && !inside_query->box_may_touch(c0, c1)) return true;
+    if (inside_known_[t] && inside_query->segment_clear(c0, c1)) return true;
     return inside_query->side(c1) > 0;
   }
   /// Tet t's centroid (at the current positions) passed inside_ok or inside_ok_moved. Threads
   /// may mark different tets at once.
   void mark_inside(std::uint32_t t) { inside_known_[t] = 1; }
+  /// Marks inside, once inside_query is set, every tet with a surface vertex whose centroid
+  /// lies strictly inside: centroid_sides over those tets and the faces between them, one
+  /// exact inside test per connected set instead of one at each tet's first move. Without
+  /// region_query only (there, inside means inside the tet's own body).
+  void certify_inside();
 
   /// Writes the tets back (compacted, in slot order), the regions, and the boundary faces:
   /// the faces of mesh.boundary that are still boundary faces keep their order and vertex

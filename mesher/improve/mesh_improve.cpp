@@ -150,6 +150,7 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
     ++(best_is_boundary ? c.boundary_flips : best_is_edge ? c.edge_removals : c.face_removals);
     for (std::uint32_t o : best.old) cache.refresh(o);
     for (std::uint32_t n : created) {
+      if (!best_is_boundary) m.mark_inside(n);  // flip_valid passed inside_ok on every one
       const double qn = cache.refresh(n);
       if (qn < threshold) heap.emplace(qn, n, m.version(n));
     }
@@ -380,6 +381,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain, const ImproveO
   ImproveTets m(mesh.nodes, mesh.tets, mesh.tet_region);
   m.inside_query = &query;
   m.region_query = domain.regions;
+  m.certify_inside();
   auto stage = [&](const std::string& name, std::size_t ops) {
     const double seconds = sw.seconds();
     ImproveStage s;

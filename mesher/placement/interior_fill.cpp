@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "core/rng.h"
+#include "mesher/parallel_for.h"
 
 namespace kdmesh {
 
@@ -91,8 +92,14 @@ struct Filler {
       dc = query.distance(c);
       ++L.stats.distance_queries;
       if (dc > R) {  // the block misses the surface: it is all on one side
-        side_c = query.side(c);
-        ++L.stats.side_queries;
+        // The parent's centre's side, carried along a segment meeting no facet (exact), else
+        // the inside test.
+        if (parent.side != 0 && query.segment_clear(parent.c, c)) {
+          side_c = parent.side;
+        } else {
+          side_c = query.side(c);
+          ++L.stats.side_queries;
+        }
         if (side_c < 0) return;
       }
     }
@@ -119,8 +126,12 @@ struct Filler {
     }
     ++L.stats.blocks;
     if (!far && side_c == 2) {
-      side_c = query.side(c);
-      ++L.stats.side_queries;
+      if (parent.side != 0 && query.segment_clear(parent.c, c)) {
+        side_c = parent.side;  // carried (exact)
+      } else {
+        side_c = query.side(c);
+        ++L.stats.side_queries;
+      }
     }
     for (int k = k_lo; k <= k_hi; ++k) lattice_points(k, lo, hi, c, dc, side_c, far, L);
   }
@@ -197,6 +208,7 @@ struct Filler {
     if (!(dp >= need) || !(dp > 0)) return false;
     // B(p, dp) and B(c, dc) are surface-free; if they overlap, p and c are on one side.
     if (side_c != 0 && pc < (dp + dc) * kSafe) return side_c > 0;
+    if (side_c != 0 && query.segment_clear(c, cand.p)) return side_c > 0;  // carried (exact)
     ++st.side_queries;
     return query.side(cand.p) > 0;
   }
@@ -290,16 +302,25 @@ InteriorFillStats fill_interior(const SurfaceMesh& surface, const double* lo, co
   // result equals testing everything against one grid, at a fraction of the cost.
   SpacingGrid others(grid.lo(), grid.s0());
   others.set_lipschitz(sizing.options().gradation);
+  // Within a level the tests are independent (both grids are only read), so they run on
+  // `threads` threads; the accepted candidates keep their order.
   std::vector<const Candidate*> accepted;
   for (int k = levels - 1; k >= 0; --k) {
     const std::size_t first = accepted.size();
-    for (const Candidate* c : by_level[std::size_t(k)]) {
-      if (progress && (++seen & 0xfffff) == 0) progress(0.5 + 0.4 * double(seen) / double(total));
-      const double reach = options.beta * (c->h + F.hmax) / 2;
-      if (!(c->dlb * (1 - 1e-9) > reach) && grid.conflicts(c->p, c->h, options.beta)) continue;
-      if (others.size() && others.conflicts(c->p, c->h, options.beta)) continue;
-      accepted.push_back(c);
-    }
+    const std::vector<const Candidate*>& level = by_level[std::size_t(k)];
+    std::vector<std::uint8_t> ok(level.size());
+    parallel_for(level.size(), [&](std::size_t b, std::size_t e, unsigned) {
+      for (std::size_t i = b; i < e; ++i) {
+        const Candidate* c = level[i];
+        const double reach = options.beta * (c->h + F.hmax) / 2;
+        ok[i] = !(!(c->dlb * (1 - 1e-9) > reach) && grid.conflicts(c->p, c->h, options.beta)) &&
+                !(others.size() && others.conflicts(c->p, c->h, options.beta));
+      }
+    }, 1024, nthreads);
+    for (std::size_t i = 0; i < level.size(); ++i)
+      if (ok[i]) accepted.push_back(level[i]);
+    seen += level.size();
+    if (progress) progress(0.5 + 0.4 * double(seen) / double(std::max<std::size_t>(total, 1)));
     for (std::size_t i = first; i < accepted.size(); ++i) others.insert(accepted[i]->p, accepted[i]->h);
   }
   for (const Candidate* c : accepted) {

@@ -15,6 +15,7 @@
 #include "core/triangle_distance.h"
 #include "mesher/parallel_for.h"
 #include "mesher/quality/centroid_sides.h"
+#include "mesher/quality/face_samples.h"
 #include "mesher/delaunay/predicates.h"
 
 namespace kdmesh {
@@ -41,17 +42,48 @@ bool same_cycle(const std::array<std::uint32_t, 3>& a, const std::array<std::uin
   return false;
 }
 
+/// The 4 faces of every tet, outward, sorted by (vertex set, tet): a counting sort on the
+/// smallest vertex, then each bucket sorted on its own (in parallel), into one array.
+std::vector<Face> sorted_faces(const std::vector<std::uint32_t>& tets, std::size_t np) {
+  static constexpr int kF[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  const std::size_t nt = tets.size() / 4;
+  auto make = [&](std::size_t t, int i) {
+    Face f;
+    for (int j = 0; j < 3; ++j) f.out[j] = tets[4 * t + kF[i][j]];
+    f.key = f.out;
+    std::sort(f.key.begin(), f.key.end());
+    f.tet = std::uint32_t(t);
+    return f;
+  };
+  std::vector<std::size_t> start(np + 1, 0);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int i = 0; i < 4; ++i) ++start[std::min({tets[4 * t + kF[i][0]], tets[4 * t + kF[i][1]], tets[4 * t + kF[i][2]]}) + 1];
+  for (std::size_t v = 0; v < np; ++v) start[v + 1] += start[v];
+  std::vector<Face> faces(4 * nt);
+  {
+    std::vector<std::size_t> at(start.begin(), start.end() - 1);
+    for (std::size_t t = 0; t < nt; ++t)
+      for (int i = 0; i < 4; ++i) {
+        const Face f = make(t, i);
+        faces[at[f.key[0]]++] = f;
+      }
+  }
+  parallel_for(np, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t v = b; v < e; ++v)
+      std::sort(faces.begin() + std::ptrdiff_t(start[v]), faces.begin() + std::ptrdiff_t(start[v + 1]),
+                [](const Face& a, const Face& c) { return a.key != c.key ? a.key < c.key : a.tet < c.tet; });
+  }, 1024);
+  return faces;
+}
+
 /// The largest of `distance` over 7 sample points of the triangle (centroid, edge midpoints,
 /// and the midpoints between the centroid and the corners): the check's face-distance measure.
 template <class Distance>
 double worst_sample(const double* p0, const double* p1, const double* p2, const Distance& distance) {
-  static constexpr double kBary[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0.5, 0}, {0, 0.5, 0.5},
-                                         {0.5, 0, 0.5}, {2.0 / 3, 1.0 / 6, 1.0 / 6},
-                                         {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
   double worst = 0;
-  for (auto& w : kBary) {
+  for (int k = 0; k < 7; ++k) {
     double s[3];
-    for (int q = 0; q < 3; ++q) s[q] = w[0] * p0[q] + w[1] * p1[q] + w[2] * p2[q];
+    face_sample(p0, p1, p2, k, s);
     worst = std::max(worst, distance(s));
   }
   return worst;
@@ -92,17 +124,7 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
   }
 
   // The faces, sorted by their vertex sets (matched below; the inside test uses the pairs).
-  static constexpr int kF[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-  std::vector<Face> faces(4 * nt);
-  for (std::size_t t = 0; t < nt; ++t)
-    for (int i = 0; i < 4; ++i) {
-      Face& f = faces[4 * t + i];
-      for (int j = 0; j < 3; ++j) f.out[j] = mesh.tets[4 * t + kF[i][j]];
-      f.key = f.out;
-      std::sort(f.key.begin(), f.key.end());
-      f.tet = std::uint32_t(t);
-    }
-  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.key < b.key; });
+  const std::vector<Face> faces = sorted_faces(mesh.tets, np);
 
   // ---- per tet: exact orientation, centroid inside, volume ----
   std::vector<std::uint8_t> bad_orient(nt, 0), outside(nt, 0), straddles(nt, 0);

@@ -223,22 +223,86 @@ class BoxGrid {
     min_cell_ = std::numeric_limits<double>::infinity();
     for (int k = 0; k < 3; ++k)
       if (inv_[k] > 0) min_cell_ = std::min(min_cell_, 1 / inv_[k]);
+    register_triangles(count.size() - 1);
+  }
+
+  /// Each facet also in the cells its triangle comes near, not only its box: a long
+  /// diagonal facet's box spans many cells its triangle never touches. A cell takes the facet
+  /// when the triangle comes within the cell's half diagonal of its centre (plus a margin of
+  /// 1e-6 cell and 1e-13 x the coordinates' magnitude for the rounding of the centre, of the
+  /// distance and of a point's cell index): every facet that has a point in a cell, or at a
+  /// point whose computed cell index is that cell, is in its list.
+  void register_triangles(std::size_t cells) {
+    double size[3], magnitude = 0, big = 0;
+    for (int k = 0; k < 3; ++k) {
+      size[k] = inv_[k] > 0 ? 1 / inv_[k] : 0;
+      big = std::max(big, size[k]);
+      magnitude = std::max({magnitude, std::fabs(lo_[k]), std::fabs(hi_[k])});
+    }
+    const double reach = 0.5 * std::sqrt(size[0] * size[0] + size[1] * size[1] + size[2] * size[2]) + 1e-6 * big +
+                         1e-13 * magnitude;
+    std::vector<std::uint32_t> count(cells + 1, 0);
+    auto each_cell = [&](std::uint32_t f, auto&& g) {
+      const std::array<double, 6>& b = boxes_[f];
+      const double* t = &corners_[9 * std::size_t(f)];
+      int a[3], z[3];
+      for (int k = 0; k < 3; ++k) a[k] = index(k, b[k]), z[k] = index(k, b[3 + k]);
+      for (int l = a[2]; l <= z[2]; ++l)
+        for (int j = a[1]; j <= z[1]; ++j)
+          for (int i = a[0]; i <= z[0]; ++i) {
+            const double c[3] = {lo_[0] + (i + 0.5) * size[0], lo_[1] + (j + 0.5) * size[1], lo_[2] + (l + 0.5) * size[2]};
+            if (triangle_distance(c, t, t + 3, t + 6) <= reach) g((std::size_t(l) * n_[1] + j) * n_[0] + i);
+          }
+    };
+    for (std::uint32_t f = 0; f < boxes_.size(); ++f) each_cell(f, [&](std::size_t c) { ++count[c + 1]; });
+    for (std::size_t c = 1; c < count.size(); ++c) count[c] += count[c - 1];
+    tstart_ = count;
+    titems_.resize(count.back());
+    for (std::uint32_t f = 0; f < boxes_.size(); ++f) each_cell(f, [&](std::size_t c) { titems_[count[c]++] = f; });
+  }
+
+  /// Calls f(facet) for the facets listed in the cells that the closed box [a, b] spans (per
+  /// axis a <= b; each facet that has a point in the box is among them, some more than once)
+  /// and returns true; returns false, calling nothing, when the box spans more than
+  /// `max_cells` cells.
+  template <class F>
+  bool facets_near(const double* a, const double* b, std::size_t max_cells, F&& f) const {
+    int ia[3], ib[3];
+    std::size_t cells = 1;
+    for (int k = 0; k < 3; ++k) {
+      if (b[k] < lo_[k] || a[k] > hi_[k]) return true;  // outside every facet's box
+      ia[k] = index(k, a[k]), ib[k] = index(k, b[k]);
+      cells *= std::size_t(ib[k] - ia[k] + 1);
+    }
+    if (cells > max_cells) return false;
+    for (int l = ia[2]; l <= ib[2]; ++l)
+      for (int j = ia[1]; j <= ib[1]; ++j)
+        for (int i = ia[0]; i <= ib[0]; ++i) {
+          const std::size_t c = (std::size_t(l) * n_[1] + j) * n_[0] + i;
+          for (std::uint32_t x = tstart_[c]; x < tstart_[c + 1]; ++x) f(titems_[x]);
+        }
+    return true;
+  }
+  /// Facet f's bounding box meets the closed box [a, b] (exact comparisons).
+  bool box_meets(std::uint32_t facet, const double* a, const double* b) const {
+    const std::array<double, 6>& f = boxes_[facet];
+    return f[0] <= b[0] && a[0] <= f[3] && f[1] <= b[1] && a[1] <= f[4] && f[2] <= b[2] && a[2] <= f[5];
   }
 
   /// The distance from p to the nearest facet, searched ring by ring of cells around p's
   /// cell; NaN when that search would pass `max_ring` rings (p far from every facet: the
-  /// caller asks the tree). A facet not yet met lies in no cell of rings 0..r, so its box,
-  /// and the facet, are at least r whole cells from p on some axis (cell indices are a
-  /// monotone function of a coordinate; a 1e-6 relative margin covers the rounding of that
-  /// bound). The minimum is of the same point-triangle distances as the tree's, computed in
+  /// caller asks the tree). A facet not yet met is in no list of rings 0..r, so none of its
+  /// points has a cell index there (register_triangles): each is at least r whole cells from
+  /// p on some axis (cell indices are a monotone function of a coordinate; a 1e-6 relative
+  /// margin covers the rounding of that bound). The minimum is of the same point-triangle distances as the tree's, computed in
   /// another order of operations: equal up to rounding.
   double nearest(const double* p, int max_ring) const {
     int c0[3];
     for (int k = 0; k < 3; ++k) c0[k] = index(k, p[k]);
     double best2 = std::numeric_limits<double>::infinity();
     auto scan = [&](std::size_t c) {
-      for (std::uint32_t x = start_[c]; x < start_[c + 1]; ++x) {
-        const std::uint32_t f = items_[x];
+      for (std::uint32_t x = tstart_[c]; x < tstart_[c + 1]; ++x) {
+        const std::uint32_t f = titems_[x];
         const std::array<double, 6>& bx = boxes_[f];
         double d2 = 0;
         for (int k = 0; k < 3; ++k) {
@@ -305,6 +369,7 @@ class BoxGrid {
   double min_cell_ = 0;
   std::vector<std::array<double, 6>> boxes_;
   std::vector<double> corners_;  // 3 x 3 coordinates per facet
+  std::vector<std::uint32_t> tstart_, titems_;  // per cell: the facets whose triangle comes near it
   std::vector<std::uint32_t> start_, items_;
 };
 
@@ -357,10 +422,20 @@ bool SurfaceQuery::box_may_touch(const double* a, const double* b) const {
 }
 
 bool SurfaceQuery::segment_clear(const double* a, const double* b) const {
-  if (!box_may_touch(a, b)) return true;
-  if (a[0] == b[0] && a[1] == b[1] && a[2] == b[2]) return false;  // a point in a facet's box: not settled here
-  // AABB_traits tests boxes and triangles with the kernel's do_intersect: filtered exact.
-  return !impl_->tree.do_intersect(K::Segment_3(K::Point_3(a[0], a[1], a[2]), K::Point_3(b[0], b[1], b[2])));
+  double lo[3], hi[3];
+  for (int k = 0; k < 3; ++k) lo[k] = std::min(a[k], b[k]), hi[k] = std::max(a[k], b[k]);
+  const bool point = a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
+  const K::Segment_3 seg(K::Point_3(a[0], a[1], a[2]), K::Point_3(b[0], b[1], b[2]));
+  // The facets near the box's cells (register_triangles), each tested exactly: the kernel's
+  // do_intersect is filtered exact, as in AABB_traits. A box over many cells: the tree.
+  bool meets = false;
+  const bool searched = impl_->boxes.facets_near(lo, hi, 64, [&](std::uint32_t f) {
+    if (meets || !impl_->boxes.box_meets(f, lo, hi)) return;
+    meets = point || K().do_intersect_3_object()(seg, impl_->triangles[f]);
+  });
+  if (searched) return !meets;
+  if (point) return !box_may_touch(a, b);  // a point in a facet's box: not settled here
+  return !impl_->tree.do_intersect(seg);
 }
 
 double SurfaceQuery::ray_distance(const double* origin, const double* dir, std::uint32_t skip,

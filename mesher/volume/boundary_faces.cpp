@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "mesher/parallel_for.h"
+#include "mesher/quality/face_samples.h"
 
 namespace kdmesh {
 
@@ -128,13 +129,15 @@ std::uint8_t judge_face(const std::uint32_t* fv, const NodeSet& nodes, const Dom
   double dmax = 0;
   const bool one_facet = facet != kNoFacet && nodes.facet[fv[1]] == facet && nodes.facet[fv[2]] == facet;
   if (!one_facet) {
-    // The three vertices are not on one facet (a convex set): measure the distances.
+    // The three vertices are not on one facet (a convex set): measure the distances at the
+    // mesh check's samples (a face passing here passes there), the centroid's closest facet
+    // for the normal.
     double cp[3];
     dmax = query.closest(c, cp, &facet);
-    const double* ends[3][2] = {{p0, p1}, {p1, p2}, {p2, p0}};
-    for (auto& ed : ends) {
-      const double m[3] = {(ed[0][0] + ed[1][0]) / 2, (ed[0][1] + ed[1][1]) / 2, (ed[0][2] + ed[1][2]) / 2};
-      dmax = std::max(dmax, query.distance(m));
+    for (int k = 1; k < 7; ++k) {
+      double s[3];
+      face_sample(p0, p1, p2, k, s);
+      dmax = std::max(dmax, query.distance(s));
     }
   }
   const double h = sizing(c);
