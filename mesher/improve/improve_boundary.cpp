@@ -6,9 +6,9 @@
 #include <cmath>
 #include <vector>
 
+#include "core/face_samples.h"
 #include "mesher/improve/improve_quality.h"
 #include "mesher/improve/improve_tets.h"
-#include "mesher/quality/face_samples.h"
 #include "sizing/segment_bvh.h"
 
 namespace kdmesh {

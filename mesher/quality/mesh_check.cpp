@@ -11,11 +11,11 @@
 #include <limits>
 #include <sstream>
 
+#include "core/face_samples.h"
 #include "core/timer.h"
 #include "core/triangle_distance.h"
 #include "mesher/parallel_for.h"
 #include "mesher/quality/centroid_sides.h"
-#include "mesher/quality/face_samples.h"
 #include "mesher/delaunay/predicates.h"
 
 namespace kdmesh {

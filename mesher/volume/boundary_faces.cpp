@@ -7,8 +7,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/face_samples.h"
 #include "mesher/parallel_for.h"
-#include "mesher/quality/face_samples.h"
 
 namespace kdmesh {
 

@@ -30,11 +30,15 @@ inline std::string scratch_path(const std::string& area, const std::string& ext)
   return p.string();
 }
 
-/// Temporary files (".tmp-", core/atomic_file.h) left in `dir`.
+/// Temporary files of this process (".tmp-<pid>-", core/atomic_file.h) left in `dir`. Only
+/// this process's: ctest runs the tests of one binary as parallel processes that share the
+/// scratch directory, and another test's writer may hold a temporary there at that moment
+/// (XdmfFormat.ReplacesRegularFilesAtomically failed so under ctest -j2).
 inline int temporaries_in(const std::filesystem::path& dir) {
+  const std::string mine = ".tmp-" + std::to_string(::getpid()) + "-";
   int n = 0;
   for (const auto& e : std::filesystem::directory_iterator(dir))
-    if (e.path().filename().string().find(".tmp-") != std::string::npos) ++n;
+    if (e.path().filename().string().find(mine) != std::string::npos) ++n;
   return n;
 }
 
