@@ -82,7 +82,9 @@ TEST(CentroidSides, EveryTetGetsTheInsideTestsAnswer) {
       (got[t] > 0 ? inside : outside)++;
     }
     EXPECT_GT(inside, 0);
-    if (span > 10) EXPECT_GT(outside, 0);  // both sides met
+    if (span > 10) {
+      EXPECT_GT(outside, 0);  // both sides met
+    }
   }
 }
 

@@ -434,6 +434,22 @@ TEST(MeshBodies, FlatTetsOfInterfaceNodesAreSplitNotCarvedOut) {
                                                              vm.nodes.points.p(v[2]), vm.nodes.points.p(v[3]))));
   }
   EXPECT_GT(min_volume, 1e-6);  // no flat tet is left
+
+  // The check finds tets labelled with the other body's region (their centroids' sides are
+  // carried between neighbours of one region only): each one relabelled is counted.
+  VolumeMesh wrong = vm;
+  std::size_t relabelled = 0;
+  for (std::size_t t = 0; t < wrong.num_tets(); ++t) {
+    const std::uint32_t* v = &wrong.tets[4 * t];
+    double x = 0;
+    for (int i = 0; i < 4; ++i) x += wrong.nodes.points.p(v[i])[0] / 4;
+    if (x > 0.3 && x < 0.4) wrong.tet_region[t] = 1 - wrong.tet_region[t], ++relabelled;
+  }
+  ASSERT_GT(relabelled, 10u);
+  const MeshCheck cw = check_volume_mesh(wrong, domain);
+  EXPECT_EQ(cw.straddling_tets, relabelled);
+  EXPECT_EQ(cw.outside_tets, 0u);
+  EXPECT_FALSE(cw.ok());
 }
 
 }  // namespace

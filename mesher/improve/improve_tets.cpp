@@ -136,7 +136,7 @@ void ImproveTets::link_face(std::uint32_t t, int i, std::uint32_t ref) {
 }
 
 void ImproveTets::certify_inside() {
-  if (!inside_query || region_query) return;
+  if (!inside_query) return;
   const std::size_t nt = tv_.size() / 4;
   std::vector<std::uint32_t> sub_of(nt, kImproveNone), slots, sub_tets;
   for (std::uint32_t t = 0; t < nt; ++t)
@@ -152,7 +152,12 @@ void ImproveTets::certify_inside() {
       if (a != kImproveNone && (a >> 2) > slots[k] && sub_of[a >> 2] != kImproveNone)
         pairs.emplace_back(k, sub_of[a >> 2]);
     }
-  const std::vector<std::int8_t> side = centroid_sides(nodes_->points, sub_tets, pairs, *inside_query);
+  std::vector<std::uint32_t> sub_region;
+  if (region_query)
+    for (const std::uint32_t t : slots) sub_region.push_back(region_[t]);
+  const std::vector<std::int8_t> side =
+      region_query ? centroid_sides(nodes_->points, sub_tets, pairs, *inside_query, *region_query, sub_region)
+                   : centroid_sides(nodes_->points, sub_tets, pairs, *inside_query);
   for (std::size_t k = 0; k < slots.size(); ++k)
     if (side[k] == 1) inside_known_[slots[k]] = 1;
 }

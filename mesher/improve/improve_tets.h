@@ -175,10 +175,10 @@ class ImproveTets {
   /// Tet t's centroid (at the current positions) passed inside_ok or inside_ok_moved. Threads
   /// may mark different tets at once.
   void mark_inside(std::uint32_t t) { inside_known_[t] = 1; }
-  /// Marks inside, once inside_query is set, every tet with a surface vertex whose centroid
-  /// lies strictly inside: centroid_sides over those tets and the faces between them, one
-  /// exact inside test per connected set instead of one at each tet's first move. Without
-  /// region_query only (there, inside means inside the tet's own body).
+  /// Marks inside, once inside_query (and region_query, if any) is set, every tet with a
+  /// surface vertex whose centroid lies strictly inside (with regions: in its region's body):
+  /// centroid_sides over those tets and the faces between them, one exact inside test per
+  /// connected set instead of one at each tet's first move.
   void certify_inside();
 
   /// Writes the tets back (compacted, in slot order), the regions, and the boundary faces:

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/point_set.h"
+#include "mesher/surface/region_query.h"
 #include "mesher/surface/surface_query.h"
 
 namespace kdmesh {
@@ -20,5 +21,14 @@ namespace kdmesh {
 std::vector<std::int8_t> centroid_sides(const PointSet& points, const std::vector<std::uint32_t>& tets,
                                         const std::vector<std::pair<std::uint32_t, std::uint32_t>>& neighbours,
                                         const SurfaceQuery& query);
+
+/// The same for touching bodies: per tet, 1 when its centroid lies in the body of its region
+/// (tet_region, RegionQuery::in_body), 2 when strictly inside the solid but in another body
+/// (across an interface), else SurfaceQuery::side (0 or -1). Neighbours of one region carry
+/// the answer along a segment that meets neither the surface nor an interface.
+std::vector<std::int8_t> centroid_sides(const PointSet& points, const std::vector<std::uint32_t>& tets,
+                                        const std::vector<std::pair<std::uint32_t, std::uint32_t>>& neighbours,
+                                        const SurfaceQuery& query, const RegionQuery& regions,
+                                        const std::vector<std::uint32_t>& tet_region);
 
 }  // namespace kdmesh

@@ -126,7 +126,7 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
   // The faces, sorted by their vertex sets (matched below; the inside test uses the pairs).
   const std::vector<Face> faces = sorted_faces(mesh.tets, np);
 
-  // ---- per tet: exact orientation, centroid inside, volume ----
+  // ---- per tet: exact orientation, volume; then the centroids' sides ----
   std::vector<std::uint8_t> bad_orient(nt, 0), outside(nt, 0), straddles(nt, 0);
   const RegionQuery* rq = domain.regions;
   const bool regions = mesh.tet_region.size() == nt;
@@ -141,15 +141,6 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
       const double *a = pts.p(v[0]), *bb = pts.p(v[1]), *cc = pts.p(v[2]), *d = pts.p(v[3]);
       if (pred::orient3d(a, bb, cc, d) <= 0) bad_orient[t] = 1;
       else if (volume_length(a, bb, cc, d) < kZeroVolumeLength) bad_orient[t] = 2;  // zero volume
-      double m[3];
-      for (int k = 0; k < 3; ++k) m[k] = (a[k] + bb[k] + cc[k] + d[k]) / 4;
-      // In its region's body (one inside test): inside the solid and on the right side of every
-      // interface. Otherwise, outside or across an interface.
-      // Without regions, the sides come from centroid_sides below.
-      if (rq && regions && !rq->in_body(m, mesh.tet_region[t])) {
-        if (query.side(m) != 1) outside[t] = 1;
-        else straddles[t] = 1;
-      }
       const double u[3] = {bb[0] - a[0], bb[1] - a[1], bb[2] - a[2]};
       const double x[3] = {cc[0] - a[0], cc[1] - a[1], cc[2] - a[2]};
       const double y[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
@@ -161,16 +152,22 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
     vol_part[w] += vol;
     for (std::size_t r = 0; r < nr; ++r) region_part[w * nr + r] += rv[r];
   }, 1024, 64);
-  if (!(rq && regions)) {
-    // One exact inside test per set of tets whose centroids are joined by clear segments.
+  {
+    // One exact inside test per set of tets whose centroids are joined by clear segments:
+    // inside the solid and, with regions, in the body of the tet's region (one inside test,
+    // RegionQuery::in_body); otherwise outside, or across an interface.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
     pairs.reserve(2 * nt);
     for (std::size_t i = 0; i + 1 < faces.size(); ++i)
       if (faces[i].key == faces[i + 1].key && (i + 2 == faces.size() || faces[i + 2].key != faces[i].key) &&
           (i == 0 || faces[i - 1].key != faces[i].key))
         pairs.emplace_back(faces[i].tet, faces[i + 1].tet);
-    const std::vector<std::int8_t> side = centroid_sides(pts, mesh.tets, pairs, query);
-    for (std::size_t t = 0; t < nt; ++t) outside[t] = side[t] != 1;
+    const std::vector<std::int8_t> side = rq && regions ? centroid_sides(pts, mesh.tets, pairs, query, *rq, mesh.tet_region)
+                                                        : centroid_sides(pts, mesh.tets, pairs, query);
+    for (std::size_t t = 0; t < nt; ++t) {
+      outside[t] = side[t] <= 0;
+      straddles[t] = side[t] == 2;
+    }
   }
   for (double v : vol_part) c.mesh_volume += v;
   c.region_volume.assign(nr, 0.0);

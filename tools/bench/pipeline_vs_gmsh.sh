@@ -2,8 +2,8 @@
 # kdmesh — the whole pipeline against Gmsh on real parts (issue 22, section 2), side by side:
 # each single-body part of models/real/ below is meshed at one uniform size that gives kdmesh
 # 1-2M tets, by kdmesh (read to VTU + summary written, every check on) and by Gmsh 4.8
-# (ClassifySurfaces 40 deg, CreateGeometry, HXT, the default optimiser, General.NumThreads 2,
-# MSH 4.1 written), alternated, RUNS times each. Wall time and peak RSS (KiB) come from
+# (gmsh_hxt_geo.sh: ClassifySurfaces 40 deg, CreateGeometry, HXT, the default optimiser,
+# General.NumThreads 2; MSH 4.1 written), alternated, RUNS times each. Wall time and peak RSS (KiB) come from
 # /usr/bin/time -v; tets and min/max dihedral of both tools from the files they wrote, read by
 # tools/bench/verify_tets.py (no kdmesh code). summary.md in OUT_DIR at the end.
 # SPDX-License-Identifier: AGPL-3.0-or-later
@@ -20,6 +20,8 @@ PARTS="${PARTS:-hinge.stl t13_data.stl rotor.ply pinion.ply joint.ply}"
 TETS="${TETS:-1500000}"
 RUNS="${RUNS:-2}"
 PY=/usr/bin/python3
+# shellcheck source=tools/bench/gmsh_hxt_geo.sh
+source "$root/tools/bench/gmsh_hxt_geo.sh"
 command -v gmsh >/dev/null || { echo "pipeline_vs_gmsh: gmsh missing (apt-get install gmsh)" >&2; exit 2; }
 mkdir -p "$out"
 rm -f "$out/runs.csv"
@@ -42,17 +44,7 @@ for part in $PARTS; do
   "$K" mesh "$src" --size "$h" -o "$d/calib.vtu" --summary "$d/calib.json" -q >/dev/null  # again: refinement is not h^3
   h=$(tets_of "$d/calib.json" "$h" "$TETS")
   rm -f "$d/calib.vtu"
-  cat >"$d/in.geo" <<GEO
-Merge "$src";
-ClassifySurfaces{40*Pi/180, 1, 1, Pi};
-CreateGeometry;
-Surface Loop(1) = Surface{:};
-Volume(1) = {1};
-Mesh.Algorithm3D = 10;
-Mesh.MeshSizeMin = $h;
-Mesh.MeshSizeMax = $h;
-General.NumThreads = 2;
-GEO
+  gmsh_hxt_geo "$src" "$h" >"$d/in.geo"
   for r in $(seq 1 "$RUNS"); do
     /usr/bin/time -v -o "$d/kdmesh-$r.time" "$K" mesh "$src" --size "$h" -o "$d/kdmesh.vtu" \
       --summary "$d/kdmesh-$r.json" -q >/dev/null 2>"$d/kdmesh-$r.err"

@@ -32,6 +32,8 @@ set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 bench="$root/tools/bench"
+# shellcheck source=tools/bench/gmsh_hxt_geo.sh
+source "$bench/gmsh_hxt_geo.sh"
 TOOLS="${TOOLS:-kdmesh tetgen gmsh mesh3}"
 SIZES="${SIZES:-20 40 80}"
 KDMESH="${KDMESH:-$root/build/kdmesh}"
@@ -167,18 +169,7 @@ sys.exit(len(d) != 84 or 84 + 50 * struct.unpack("<I", d[80:])[0] != os.path.get
       cmd=(stdbuf -o0 tetgen -pq1.414a"$v"Q "$d/in.$ext") ;;
     gmsh)
       mesh="$d/out.msh"
-      cat >"$d/in.geo" <<EOF
-// kdmesh real_parts.sh: Gmsh HXT from the part's triangles
-Merge "$src";
-ClassifySurfaces{40*Pi/180, 1, 1, Pi};
-CreateGeometry;
-Surface Loop(1) = Surface{:};
-Volume(1) = {1};
-Mesh.Algorithm3D = 10;
-Mesh.MeshSizeMin = $h;
-Mesh.MeshSizeMax = $h;
-General.NumThreads = 2;
-EOF
+      gmsh_hxt_geo "$src" "$h" >"$d/in.geo"
       cmd=(gmsh "$d/in.geo" -3 -format msh4 -o "$mesh") ;;
     mesh3)
       mesh="$d/out.mesh"
