@@ -187,7 +187,8 @@ void write_boundary_vtu(const FeMesh& mesh, const std::string& path) {
   writer->AddObserver(vtkCommand::ErrorEvent, errors);
   writer->WriteToOutputStringOn();
   writer->SetInputData(grid);
-  writer->SetDataModeToBinary();
+  writer->SetDataModeToAppended();  // raw, as write_vtu (io/vtu_writer.cpp)
+  writer->EncodeAppendedDataOff();
   writer->SetCompressorTypeToZLib();
   writer->SetCompressionLevel(kZlibLevel);
   writer->GetCompressor()->AddObserver(vtkCommand::ErrorEvent, errors);
