@@ -98,106 +98,62 @@ class SineCache {
   std::vector<double> q_;
 };
 
-/// A tet's best flip, found on the mesh as it stood, and the versions of the tets it replaces.
-struct FlipChoice {
-  FlipCandidate best;
-  std::vector<std::uint32_t> versions;
-  bool have = false, is_edge = false, is_boundary = false;
-};
-
-/// The best improving edge removal, face removal or (given `boundary`) boundary edge removal
-/// of tet t. Validity (exact orientation, inside tests) is checked last, only for a candidate
-/// that would become the best: the same choice as checking every candidate, for less work.
-/// Reads the mesh only (thread-safe).
-void best_flip(const ImproveTets& m, std::uint32_t t, const double* sines, int max_ring,
-               const BoundaryContext* boundary, FlipChoice& out) {
-  static thread_local FlipCandidate cand;
-  FlipCandidate& best = out.best;
-  best.q_new = -1;
-  best.q_old = 0;
-  out.have = out.is_edge = out.is_boundary = false;
-  const std::uint32_t* v = m.v(t);
-  for (const auto& e : kTetEdge)
-    if (edge_removal(m, t, v[e[0]], v[e[1]], max_ring, cand, out.have ? best.q_new : -1, sines, false) &&
-        cand.improves() && (!out.have || cand.q_new > best.q_new) && flip_valid(m, cand)) {
-      std::swap(best, cand);
-      out.have = out.is_edge = true;
-    }
-  for (int i = 0; i < 4; ++i)
-    if (face_removal(m, t, i, cand, sines, false) && cand.improves() && (!out.have || cand.q_new > best.q_new) &&
-        flip_valid(m, cand)) {
-      std::swap(best, cand);
-      out.have = true;
-      out.is_edge = false;
-    }
-  if (boundary)
-    for (const auto& e : kTetEdge)
-      if (boundary_edge_removal(m, t, v[e[0]], v[e[1]], max_ring, *boundary, cand, out.have ? best.q_new : -1,
-                                sines) &&
-          cand.improves() && (!out.have || cand.q_new > best.q_new)) {
-        std::swap(best, cand);
-        out.have = out.is_boundary = true;
-        out.is_edge = false;
-      }
-  out.versions.clear();
-  if (out.have)
-    for (const std::uint32_t o : best.old) out.versions.push_back(m.version(o));
-}
-
 /// Flips until no tet below `threshold` has an improving edge or face removal (or, given
-/// `boundary`, boundary edge removal). In rounds: the tets below the threshold, worst first
-/// (ties by id), in batches; every tet of a batch finds its best flip on the mesh as it
-/// stands, on `threads` threads (reads only); then the batch's flips are made in that order,
-/// each only if the tets it replaces are unchanged since. A tet whose flip went stale, and
-/// every new tet below the threshold, waits for the next round. The flips made, and so the
-/// result, do not depend on the thread count.
+/// `boundary`, boundary edge removal). Tets are taken worst first (ties by id); each takes the
+/// best of its candidates.
 std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring,
-                      Counters& c, unsigned threads, const BoundaryContext* boundary = nullptr) {
-  std::vector<std::pair<double, std::uint32_t>> todo, next;  // (quality, tet)
+                      Counters& c, const BoundaryContext* boundary = nullptr) {
+  using Entry = std::tuple<double, std::uint32_t, std::uint32_t>;  // quality, tet, version
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
   for (std::uint32_t t = 0; t < m.capacity(); ++t)
-    if (cache.q()[t] < threshold) todo.emplace_back(cache.q()[t], t);
-  constexpr std::size_t kBatch = 1 << 15;  // bounds the candidates held at once
-  std::vector<FlipChoice> choice(std::min(todo.size(), kBatch));
+    if (cache.q()[t] < threshold) heap.emplace(cache.q()[t], t, m.version(t));
   std::size_t ops = 0;
+  FlipCandidate cand, best;
   std::vector<std::uint32_t> created;
-  while (!todo.empty()) {
-    std::sort(todo.begin(), todo.end());
-    todo.erase(std::unique(todo.begin(), todo.end()), todo.end());
-    next.clear();
-    for (std::size_t first = 0; first < todo.size(); first += kBatch) {
-      const std::size_t n = std::min(kBatch, todo.size() - first);
-      if (choice.size() < n) choice.resize(n);
-      const double* sines = cache.q().data();
-      parallel_for(n, [&](std::size_t b, std::size_t e, unsigned) {
-        for (std::size_t i = b; i < e; ++i) {
-          const std::uint32_t t = todo[first + i].second;
-          choice[i].have = false;
-          if (m.alive(t) && sines[t] == todo[first + i].first) best_flip(m, t, sines, max_ring, boundary, choice[i]);
-        }
-      }, 64, threads);
-      for (std::size_t i = 0; i < n; ++i) {
-        const FlipChoice& ch = choice[i];
-        if (!ch.have) continue;
-        bool unchanged = true;
-        for (std::size_t k = 0; k < ch.best.old.size() && unchanged; ++k)
-          unchanged = m.alive(ch.best.old[k]) && m.version(ch.best.old[k]) == ch.versions[k];
-        const std::uint32_t t = todo[first + i].second;
-        if (!unchanged) {  // a neighbour's flip came first: look again next round
-          if (m.alive(t) && cache.q()[t] < threshold) next.emplace_back(cache.q()[t], t);
-          continue;
-        }
-        if (!m.replace(ch.best.old, ch.best.fresh, &created, ch.is_boundary)) continue;
-        ++ops;
-        ++(ch.is_boundary ? c.boundary_flips : ch.is_edge ? c.edge_removals : c.face_removals);
-        for (std::uint32_t o : ch.best.old) cache.refresh(o);
-        for (std::uint32_t nt : created) {
-          if (!ch.is_boundary) m.mark_inside(nt);  // flip_valid passed inside_ok on every one
-          const double qn = cache.refresh(nt);
-          if (qn < threshold) next.emplace_back(qn, nt);
-        }
+  while (!heap.empty()) {
+    const auto [q, t, ver] = heap.top();
+    heap.pop();
+    if (!m.alive(t) || m.version(t) != ver) continue;
+    best.q_new = -1;
+    best.q_old = 0;
+    bool have = false, best_is_edge = false, best_is_boundary = false;
+    const std::uint32_t* v = m.v(t);
+    // Validity (exact orientation, inside tests) is checked last, only for a candidate that
+    // would become the best: the same choice as checking every candidate, for less work.
+    const double* sines = cache.q().data();
+    for (const auto& e : kTetEdge)
+      if (edge_removal(m, t, v[e[0]], v[e[1]], max_ring, cand, have ? best.q_new : -1, sines,
+                       false) &&
+          cand.improves() && (!have || cand.q_new > best.q_new) && flip_valid(m, cand)) {
+        std::swap(best, cand);
+        have = best_is_edge = true;
       }
+    for (int i = 0; i < 4; ++i)
+      if (face_removal(m, t, i, cand, sines, false) && cand.improves() &&
+          (!have || cand.q_new > best.q_new) && flip_valid(m, cand)) {
+        std::swap(best, cand);
+        have = true;
+        best_is_edge = false;
+      }
+    if (boundary)
+      for (const auto& e : kTetEdge)
+        if (boundary_edge_removal(m, t, v[e[0]], v[e[1]], max_ring, *boundary, cand,
+                                  have ? best.q_new : -1, sines) &&
+            cand.improves() && (!have || cand.q_new > best.q_new)) {
+          std::swap(best, cand);
+          have = best_is_boundary = true;
+          best_is_edge = false;
+        }
+    if (!have) continue;
+    if (!m.replace(best.old, best.fresh, &created, best_is_boundary)) continue;
+    ++ops;
+    ++(best_is_boundary ? c.boundary_flips : best_is_edge ? c.edge_removals : c.face_removals);
+    for (std::uint32_t o : best.old) cache.refresh(o);
+    for (std::uint32_t n : created) {
+      if (!best_is_boundary) m.mark_inside(n);  // flip_valid passed inside_ok on every one
+      const double qn = cache.refresh(n);
+      if (qn < threshold) heap.emplace(qn, n, m.version(n));
     }
-    todo.swap(next);
   }
   return ops;
 }
@@ -489,12 +445,11 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain, const ImproveO
     }
     const std::string n = std::to_string(r + 1);
     st.rounds = r + 1;
-    std::size_t ops = flip_pass(m, cache, threshold, options.max_ring, c, options.threads, flip_boundary);
+    std::size_t ops = flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
     if (cap_threshold > 0) {
       const std::size_t removed = cap_pass(m, cache, cap_threshold, boundary);
       st.caps_removed += removed;
-      if (removed)
-        ops += removed + flip_pass(m, cache, threshold, options.max_ring, c, options.threads, flip_boundary);
+      if (removed) ops += removed + flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
     }
     if (options.split_angle > 0) {
       ops += split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary,
@@ -529,7 +484,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain, const ImproveO
       ops += split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary,
                         options.insert_nodes, /*any_tet=*/true).add_to(st);
     }
-    if (ops) ops += flip_pass(m, cache, threshold, options.max_ring, c, options.threads, flip_boundary);
+    if (ops) ops += flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
     stage("final", ops);
   }
   if (options.progress) options.progress("improve", 1.0);
