@@ -192,10 +192,9 @@ QualitySummary summarize_quality(const PointSet& points, const std::vector<std::
 
 QualitySummary summarize_quality(const TetMesh& mesh, std::vector<TetQuality>* per_tet) {
   if (per_tet) per_tet->assign(mesh.num_tets(), TetQuality{});
-  return summarize_quality(mesh.points, mesh.tets, per_tet ? TetQualityVisitor([per_tet](std::size_t t, const TetQuality& q) {
-                                                    (*per_tet)[t] = q;
-                                                  })
-                                                : TetQualityVisitor());
+  TetQualityVisitor keep;
+  if (per_tet) keep = [per_tet](std::size_t t, const TetQuality& q) { (*per_tet)[t] = q; };
+  return summarize_quality(mesh.points, mesh.tets, keep);
 }
 
 }  // namespace kdmesh

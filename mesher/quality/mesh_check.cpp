@@ -57,7 +57,8 @@ std::vector<Face> sorted_faces(const std::vector<std::uint32_t>& tets, std::size
   };
   std::vector<std::size_t> start(np + 1, 0);
   for (std::size_t t = 0; t < nt; ++t)
-    for (int i = 0; i < 4; ++i) ++start[std::min({tets[4 * t + kF[i][0]], tets[4 * t + kF[i][1]], tets[4 * t + kF[i][2]]}) + 1];
+    for (int i = 0; i < 4; ++i)
+      ++start[std::min({tets[4 * t + kF[i][0]], tets[4 * t + kF[i][1]], tets[4 * t + kF[i][2]]}) + 1];
   for (std::size_t v = 0; v < np; ++v) start[v + 1] += start[v];
   std::vector<Face> faces(4 * nt);
   {
@@ -162,8 +163,9 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
       if (faces[i].key == faces[i + 1].key && (i + 2 == faces.size() || faces[i + 2].key != faces[i].key) &&
           (i == 0 || faces[i - 1].key != faces[i].key))
         pairs.emplace_back(faces[i].tet, faces[i + 1].tet);
-    const std::vector<std::int8_t> side = rq && regions ? centroid_sides(pts, mesh.tets, pairs, query, *rq, mesh.tet_region)
-                                                        : centroid_sides(pts, mesh.tets, pairs, query);
+    const std::vector<std::int8_t> side = rq && regions
+                                              ? centroid_sides(pts, mesh.tets, pairs, query, *rq, mesh.tet_region)
+                                              : centroid_sides(pts, mesh.tets, pairs, query);
     for (std::size_t t = 0; t < nt; ++t) {
       outside[t] = side[t] <= 0;
       straddles[t] = side[t] == 2;

@@ -27,7 +27,8 @@ SizeFidelity measure_size_fidelity(const PointSet& points, const std::vector<std
   auto each_edge = [&](auto&& f) {
     for (std::size_t t = 0; t < nt; ++t)
       for (int i = 0; i < 4; ++i)
-        for (int j = i + 1; j < 4; ++j) f(std::min(tets[4 * t + i], tets[4 * t + j]), std::max(tets[4 * t + i], tets[4 * t + j]));
+        for (int j = i + 1; j < 4; ++j)
+          f(std::min(tets[4 * t + i], tets[4 * t + j]), std::max(tets[4 * t + i], tets[4 * t + j]));
   };
   each_edge([&](std::uint32_t a, std::uint32_t) { ++start[a + 1]; });
   for (std::size_t v = 0; v < np; ++v) start[v + 1] += start[v];
@@ -50,7 +51,10 @@ SizeFidelity measure_size_fidelity(const PointSet& points, const std::vector<std
   from.reserve(ne);
   to.reserve(ne);
   for (std::size_t v = 0; v < np; ++v)
-    for (std::uint32_t k = 0; k < unique_count[v]; ++k) from.push_back(std::uint32_t(v)), to.push_back(other[start[v] + k]);
+    for (std::uint32_t k = 0; k < unique_count[v]; ++k) {
+      from.push_back(std::uint32_t(v));
+      to.push_back(other[start[v] + k]);
+    }
   std::vector<std::uint32_t>().swap(other);
   SizeFidelity r;
   r.edges = ne;

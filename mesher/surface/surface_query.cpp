@@ -239,8 +239,8 @@ class BoxGrid {
       big = std::max(big, size[k]);
       magnitude = std::max({magnitude, std::fabs(lo_[k]), std::fabs(hi_[k])});
     }
-    const double reach = 0.5 * std::sqrt(size[0] * size[0] + size[1] * size[1] + size[2] * size[2]) + 1e-6 * big +
-                         1e-13 * magnitude;
+    const double reach =
+        0.5 * std::sqrt(size[0] * size[0] + size[1] * size[1] + size[2] * size[2]) + 1e-6 * big + 1e-13 * magnitude;
     std::vector<std::uint32_t> count(cells + 1, 0);
     auto each_cell = [&](std::uint32_t f, auto&& g) {
       const std::array<double, 6>& b = boxes_[f];
@@ -250,7 +250,8 @@ class BoxGrid {
       for (int l = a[2]; l <= z[2]; ++l)
         for (int j = a[1]; j <= z[1]; ++j)
           for (int i = a[0]; i <= z[0]; ++i) {
-            const double c[3] = {lo_[0] + (i + 0.5) * size[0], lo_[1] + (j + 0.5) * size[1], lo_[2] + (l + 0.5) * size[2]};
+            const double c[3] = {lo_[0] + (i + 0.5) * size[0], lo_[1] + (j + 0.5) * size[1],
+                                 lo_[2] + (l + 0.5) * size[2]};
             if (triangle_distance(c, t, t + 3, t + 6) <= reach) g((std::size_t(l) * n_[1] + j) * n_[0] + i);
           }
     };
@@ -294,8 +295,8 @@ class BoxGrid {
   /// caller asks the tree). A facet not yet met is in no list of rings 0..r, so none of its
   /// points has a cell index there (register_triangles): each is at least r whole cells from
   /// p on some axis (cell indices are a monotone function of a coordinate; a 1e-6 relative
-  /// margin covers the rounding of that bound). The minimum is of the same point-triangle distances as the tree's, computed in
-  /// another order of operations: equal up to rounding.
+  /// margin covers the rounding of that bound). The minimum is of the same point-triangle
+  /// distances as the tree's, computed in another order of operations: equal up to rounding.
   double nearest(const double* p, int max_ring) const {
     int c0[3];
     for (int k = 0; k < 3; ++k) c0[k] = index(k, p[k]);
@@ -470,7 +471,7 @@ double SurfaceQuery::ray_distance(const double* origin, const double* dir, std::
 }
 
 double SurfaceQuery::distance(const double* p) const {
-  // Near the surface (most callers' points), a few cells of the box grid hold the nearest
+  // Near the surface (most callers' points), a few cells of the facet grid hold the nearest
   // facet: cheaper than the tree's traversal. Farther away, the tree.
   if (std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2])) {
     const double d = impl_->boxes.nearest(p, 2);
