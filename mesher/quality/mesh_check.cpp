@@ -159,10 +159,10 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
     // RegionQuery::in_body); otherwise outside, or across an interface.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
     pairs.reserve(2 * nt);
-    for (std::size_t i = 0; i + 1 < faces.size(); ++i)
-      if (faces[i].key == faces[i + 1].key && (i + 2 == faces.size() || faces[i + 2].key != faces[i].key) &&
-          (i == 0 || faces[i - 1].key != faces[i].key))
-        pairs.emplace_back(faces[i].tet, faces[i + 1].tet);
+    for (std::size_t i = 0, j = 0; i < faces.size(); i = j) {  // groups of one key, as matched below
+      while (j < faces.size() && faces[j].key == faces[i].key) ++j;
+      if (j - i == 2) pairs.emplace_back(faces[i].tet, faces[i + 1].tet);
+    }
     const std::vector<std::int8_t> side = rq && regions
                                               ? centroid_sides(pts, mesh.tets, pairs, query, *rq, mesh.tet_region)
                                               : centroid_sides(pts, mesh.tets, pairs, query);

@@ -434,8 +434,7 @@ bool SurfaceQuery::segment_clear(const double* a, const double* b) const {
     if (meets || !impl_->boxes.box_meets(f, lo, hi)) return;
     meets = point || K().do_intersect_3_object()(seg, impl_->triangles[f]);
   });
-  if (searched) return !meets;
-  if (point) return !box_may_touch(a, b);  // a point in a facet's box: not settled here
+  if (searched) return !meets;  // always for a point: its box spans one cell
   return !impl_->tree.do_intersect(seg);
 }
 
