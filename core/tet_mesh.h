@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/point_set.h"
+#include "core/uninit_allocator.h"
 
 namespace kdmesh {
 
@@ -27,8 +28,11 @@ inline constexpr std::uint32_t kInfiniteVertex = std::numeric_limits<std::uint32
 ///  - An infinite tet has exactly one infinite vertex; replacing it by a point far outside the
 ///    hull across its finite face gives a positively oriented tet.
 /// Every tet in the arrays is alive (no holes).
+/// The records of a Triangulation: resize(n) leaves new records unwritten (UninitAllocator).
+using TetRecords = std::vector<std::uint32_t, UninitAllocator<std::uint32_t>>;
+
 struct Triangulation {
-  std::vector<std::uint32_t> data;  ///< 8 per tet: v0 v1 v2 v3 adj0 adj1 adj2 adj3
+  TetRecords data;  ///< 8 per tet: v0 v1 v2 v3 adj0 adj1 adj2 adj3
 
   std::size_t num_tets() const { return data.size() / 8; }
   std::uint32_t v(std::size_t t, int i) const { return data[8 * t + i]; }

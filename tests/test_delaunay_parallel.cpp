@@ -115,6 +115,25 @@ TEST(ParallelDelaunay, DuplicatesAreSkippedInRounds) {
   expect_same_as_sequential(pts, 2, "cube with 3000 repeats");
 }
 
+// Workers look a vertex's slab up in a table filled up to the round's last rank. A caller's
+// hint may name a point later in the order, whose slab is not filled yet: the point that asks
+// waits for a later round, and the tets are still the sequential ones.
+TEST(ParallelDelaunay, HintsToPointsLaterInTheOrderAreHonoured) {
+  const PointSet pts = generate_points(Distribution::cube, kN, 7);
+  Ordering order = make_order(pts, {OrderKind::kd_bfs, 1, 0.125});
+  const std::size_t n = order.size();
+  for (std::size_t k = 4; k < n; k += 3) order.hint[k] = order.order[n - 1 - k / 2];
+  DelaunayOptions o;
+  const DelaunayResult seq = delaunay(pts, order, o);
+  o.threads = 2;
+  const DelaunayResult par = delaunay(pts, order, o);
+  EXPECT_GE(par.stats.parallel_rounds, 1u);
+  EXPECT_GT(par.stats.deferrals, 0u);
+  EXPECT_EQ(par.stats.inserted, seq.stats.inserted);
+  expect_valid(pts, par, "hints forward");
+  EXPECT_TRUE(compare_tets(pts, canonical_tets(pts, seq.tri), canonical_tets(pts, par.tri)).same_set());
+}
+
 TEST(ParallelDelaunay, AbsurdThreadCountIsAUsageError) {
   EXPECT_THROW(run(generate_points(Distribution::cube, 1000, 1), 100000), UsageError);
 }

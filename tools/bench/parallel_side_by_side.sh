@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
-# Usage: bash tools/bench/parallel_side_by_side.sh [OUT_DIR] [N]   (KDMESH=path/to/kdmesh; ~4 min)
+# Usage: bash tools/bench/parallel_side_by_side.sh [OUT_DIR] [N]   (KDMESH=path/to/kdmesh; ~6 min)
 #        DISTS="cube axes" (default) or any of the seven distributions; REPS=3 (default)
 # SPDX-License-Identifier: AGPL-3.0-or-later
 # The kdmesh kernel with its default order (kd-bfs-hilbert) sequential (t1) and on two threads
-# (t2), and with the paper's kd-bfs order sequential (kd-bfs), against CGAL 5.5
-# insert(range), on N (default 1M) points of each distribution in DISTS from `kdmesh points
-# --seed 1`. Separate processes, alternated REPS times so that the machine's drift hits every
-# column alike; each under /usr/bin/time -v. Times are order + Delaunay as `kdmesh delaunay` reports them (CGAL:
-# its insert(range), which sorts internally). Writes summary.md (one row per process) to OUT_DIR.
+# (t2), and with the paper's kd-bfs order sequential (kd-bfs), against CGAL 5.5's insert(range)
+# twice: stock (a plain Delaunay_triangulation_3<Epick> inserting a Point_3 range, --kernel
+# cgal-plain) and with point ids as vertex info (--kernel cgal). N (default 1M) points of each
+# distribution in DISTS from `kdmesh points --seed 1`. Separate processes, alternated REPS
+# times so that the machine's drift hits every column alike; each under /usr/bin/time -v.
+# Times are order + Delaunay as `kdmesh delaunay` reports them (CGAL: its insert(range), which
+# sorts internally). Writes summary.md (one row per process) to OUT_DIR.
 set -eu
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 K="$(realpath "${KDMESH:-$here/build/kdmesh}")"  # absolute: the runs cd to OUT_DIR
@@ -21,11 +23,12 @@ echo "|---|---|---|---|---|---|---|---|---|" >> summary.md
 for d in $dists; do
   [ -f $d.xyz ] || $K points --dist $d -n "$n" --seed 1 -o $d.xyz -q
   for rep in $(seq 1 "$reps"); do
-    for mode in t1 t2 kd-bfs cgal; do
+    for mode in t1 t2 kd-bfs stock cgal; do
       case $mode in
         t1) args=(--threads 1);;
         t2) args=(--threads 2);;
         kd-bfs) args=(--threads 1 --order kd-bfs);;
+        stock) args=(--kernel cgal-plain --order cgal);;
         cgal) args=(--kernel cgal --order cgal);;
       esac
       /usr/bin/time -v $K delaunay $d.xyz "${args[@]}" --json -q > $d-$mode-$rep.json 2> $d-$mode-$rep.time
