@@ -145,7 +145,24 @@ TEST(SurfaceQuery, DistanceIsTheNearestFacetsNearAndFar) {
   for (int i = 0; i < 8; ++i) slab.points.push_back(i & 1 ? 100.0 : 0.0, i & 2 ? 1.0 : 0.0, i & 4 ? 1.0 : 0.0);
   const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& q : quads) slab.tris.insert(slab.tris.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
-  for (const SurfaceMesh& s : {sphere(10, 4), slab}) {
+  // A gear-like prism: 400 long needle facets around (each ~500 times longer than wide, so
+  // a point near one lies in many facet boxes, and a plane's computed normal is least
+  // certain), closed by two coplanar fans (many facets at one plane distance).
+  SurfaceMesh prism;
+  constexpr int kSides = 200;
+  for (int end = 0; end < 2; ++end) {
+    for (int i = 0; i < kSides; ++i) {
+      const double a = 6.283185307179586 * i / kSides, r = i % 2 ? 1.0 : 0.9;  // teeth
+      prism.points.push_back(r * std::cos(a), r * std::sin(a), end * 15.0);
+    }
+    prism.points.push_back(0.0, 0.0, end * 15.0);  // the fan's centre
+  }
+  const std::uint32_t c0 = kSides, c1 = 2 * kSides + 1;
+  for (std::uint32_t i = 0; i < kSides; ++i) {
+    const std::uint32_t j = (i + 1) % kSides, a0 = i, b0 = j, a1 = kSides + 1 + i, b1 = kSides + 1 + j;
+    prism.tris.insert(prism.tris.end(), {a0, b0, b1, a0, b1, a1, c0, b0, a0, c1, a1, b1});
+  }
+  for (const SurfaceMesh& s : {sphere(10, 4), slab, prism}) {
     const SurfaceQuery q(s);
     double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
     for (std::size_t v = 0; v < s.points.size(); ++v)
