@@ -100,35 +100,35 @@ bool MeshCheck::only_sizing_failures() const {
                                 std::size_t(volume_off);
 }
 
-MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
-                            const MeshCheckOptions& options) {
-  const PreparedSurface& surface = domain.surface;
-  const SurfaceQuery& query = domain.query;
-  const SizingField& sizing = domain.sizing;
-  MeshCheck c;
-  const PointSet& pts = mesh.nodes.points;
-  const std::size_t np = pts.size(), nt = mesh.num_tets();
-  c.tets = nt;
-  c.solid_volume = surface.volume;
-  constexpr std::size_t kShow = 5;
+namespace {
 
-  // ---- ids ----
+constexpr std::size_t kShow = 5;  // examples named per failure
+using Tri = std::array<std::uint32_t, 3>;
+
+/// Every id names a point and the array holds whole tets; false (with the failure) if not.
+bool ids_valid(const VolumeMesh& mesh, MeshCheck& c) {
+  const std::size_t np = mesh.nodes.points.size();
   for (std::size_t k = 0; k < mesh.tets.size(); ++k)
     if (mesh.tets[k] >= np) {
       c.failures.push_back("tet " + std::to_string(k / 4) + " references point " +
                            std::to_string(mesh.tets[k]) + " of " + std::to_string(np));
-      return c;
+      return false;
     }
   if (mesh.tets.size() % 4 != 0) {
     c.failures.push_back("tet array length " + std::to_string(mesh.tets.size()) + " is not a multiple of 4");
-    return c;
+    return false;
   }
+  return true;
+}
 
-  // The faces, sorted by their vertex sets (matched below; the inside test uses the pairs).
-  const std::vector<Face> faces = sorted_faces(mesh.tets, np);
-
-  // ---- per tet: exact orientation, volume; then the centroids' sides ----
-  std::vector<std::uint8_t> bad_orient(nt, 0), outside(nt, 0), straddles(nt, 0);
+/// Per tet: exact orientation, zero volume at rounding level, and volume (in total and per
+/// region) in parallel; then the centroids' sides, one exact inside test per set of tets
+/// whose centroids are joined by clear segments (`faces` give the neighbour pairs): inside the
+/// solid and, with regions, in the body of the tet's region (RegionQuery::in_body).
+void check_tets(const VolumeMesh& mesh, const Domain& domain, const std::vector<Face>& faces, MeshCheck& c) {
+  const PointSet& pts = mesh.nodes.points;
+  const std::size_t nt = mesh.num_tets();
+  std::vector<std::uint8_t> bad_orient(nt, 0);
   const RegionQuery* rq = domain.regions;
   const bool regions = mesh.tet_region.size() == nt;
   const std::size_t nr =
@@ -153,58 +153,53 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
     vol_part[w] += vol;
     for (std::size_t r = 0; r < nr; ++r) region_part[w * nr + r] += rv[r];
   }, 1024, 64);
-  {
-    // One exact inside test per set of tets whose centroids are joined by clear segments:
-    // inside the solid and, with regions, in the body of the tet's region (one inside test,
-    // RegionQuery::in_body); otherwise outside, or across an interface.
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
-    pairs.reserve(2 * nt);
-    for (std::size_t i = 0, j = 0; i < faces.size(); i = j) {  // groups of one key, as matched below
-      while (j < faces.size() && faces[j].key == faces[i].key) ++j;
-      if (j - i == 2) pairs.emplace_back(faces[i].tet, faces[i + 1].tet);
-    }
-    const std::vector<std::int8_t> side = rq && regions
-                                              ? centroid_sides(pts, mesh.tets, pairs, query, *rq, mesh.tet_region)
-                                              : centroid_sides(pts, mesh.tets, pairs, query);
-    for (std::size_t t = 0; t < nt; ++t) {
-      outside[t] = side[t] <= 0;
-      straddles[t] = side[t] == 2;
-    }
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  pairs.reserve(2 * nt);
+  for (std::size_t i = 0, j = 0; i < faces.size(); i = j) {  // groups of one key, as in match_faces
+    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
+    if (j - i == 2) pairs.emplace_back(faces[i].tet, faces[i + 1].tet);
   }
+  const std::vector<std::int8_t> side = rq && regions
+                                            ? centroid_sides(pts, mesh.tets, pairs, domain.query, *rq, mesh.tet_region)
+                                            : centroid_sides(pts, mesh.tets, pairs, domain.query);
   for (double v : vol_part) c.mesh_volume += v;
   c.region_volume.assign(nr, 0.0);
   for (std::size_t w = 0; w < 64; ++w)
     for (std::size_t r = 0; r < nr; ++r) c.region_volume[r] += region_part[w * nr + r];
-  {
-    std::ostringstream o, s, f;
-    for (std::size_t t = 0; t < nt; ++t) {
-      if (bad_orient[t] == 1 && c.nonpositive_tets++ < kShow) o << " " << t;
-      if (bad_orient[t] == 2 && c.flat_tets++ < kShow) f << " " << t;
-      if (outside[t] && c.outside_tets++ < kShow) {
-        const std::uint32_t* v = &mesh.tets[4 * t];
-        double m[3];
-        for (int k = 0; k < 3; ++k) m[k] = (pts.p(v[0])[k] + pts.p(v[1])[k] + pts.p(v[2])[k] + pts.p(v[3])[k]) / 4;
-        s << " " << t << " at " << xyz(m);
-      }
-    }
-    if (c.nonpositive_tets)
-      c.failures.push_back(std::to_string(c.nonpositive_tets) + " tet(s) not positively oriented (exact orient3d <= 0), e.g. tet" + o.str());
-    if (c.flat_tets)
-      c.failures.push_back(std::to_string(c.flat_tets) + " tet(s) of zero volume at rounding level (volume-length ratio < 1e-9), e.g. tet" + f.str());
-    if (c.outside_tets)
-      c.failures.push_back(std::to_string(c.outside_tets) + " tet(s) with the centroid not strictly inside the solid, e.g. tet" + s.str());
-    std::ostringstream x;
-    for (std::size_t t = 0; t < nt; ++t)
-      if (straddles[t] && c.straddling_tets++ < kShow) x << " " << t << " (region " << mesh.tet_region[t] << ")";
-    if (c.straddling_tets)
-      c.failures.push_back(std::to_string(c.straddling_tets) +
-                           " tet(s) whose centroid lies in another body than their region's (across an interface), e.g. tet" +
-                           x.str());
-  }
 
-  // ---- faces by matching: once = boundary, twice = interior (must be opposite), more = error ----
-  std::vector<std::array<std::uint32_t, 3>> bnd;  // outward
-  std::vector<std::array<std::uint32_t, 3>> ifc;  // between two regions
+  std::ostringstream o, s, f, x;
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (bad_orient[t] == 1 && c.nonpositive_tets++ < kShow) o << " " << t;
+    if (bad_orient[t] == 2 && c.flat_tets++ < kShow) f << " " << t;
+    if (side[t] <= 0 && c.outside_tets++ < kShow) {
+      const std::uint32_t* v = &mesh.tets[4 * t];
+      double m[3];
+      for (int k = 0; k < 3; ++k) m[k] = (pts.p(v[0])[k] + pts.p(v[1])[k] + pts.p(v[2])[k] + pts.p(v[3])[k]) / 4;
+      s << " " << t << " at " << xyz(m);
+    }
+  }
+  if (c.nonpositive_tets)
+    c.failures.push_back(std::to_string(c.nonpositive_tets) + " tet(s) not positively oriented (exact orient3d <= 0), e.g. tet" + o.str());
+  if (c.flat_tets)
+    c.failures.push_back(std::to_string(c.flat_tets) + " tet(s) of zero volume at rounding level (volume-length ratio < 1e-9), e.g. tet" + f.str());
+  if (c.outside_tets)
+    c.failures.push_back(std::to_string(c.outside_tets) + " tet(s) with the centroid not strictly inside the solid, e.g. tet" + s.str());
+  for (std::size_t t = 0; t < nt; ++t)
+    if (side[t] == 2 && c.straddling_tets++ < kShow) x << " " << t << " (region " << mesh.tet_region[t] << ")";
+  if (c.straddling_tets)
+    c.failures.push_back(std::to_string(c.straddling_tets) +
+                         " tet(s) whose centroid lies in another body than their region's (across an interface), e.g. tet" +
+                         x.str());
+}
+
+/// The faces by matching: once = boundary (outward), twice = interior (the two tets must see
+/// it in opposite orientations; between two regions: an interface face), more = an error.
+/// The mesher's own boundary list must be exactly the boundary faces found.
+std::pair<std::vector<Tri>, std::vector<Tri>> match_faces(const VolumeMesh& mesh, const Domain& domain,
+                                                          const std::vector<Face>& faces, MeshCheck& c) {
+  const PointSet& pts = mesh.nodes.points;
+  const bool regions = domain.regions && mesh.tet_region.size() == mesh.num_tets();
+  std::vector<Tri> bnd, ifc;
   std::size_t overfull = 0, same_side = 0;
   std::ostringstream over_ex, same_ex;
   for (std::size_t i = 0; i < faces.size();) {
@@ -213,8 +208,7 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
     if (j - i == 1) {
       bnd.push_back(faces[i].out);
     } else if (j - i == 2) {
-      if (rq && mesh.tet_region.size() == nt && mesh.tet_region[faces[i].tet] != mesh.tet_region[faces[i + 1].tet])
-        ifc.push_back(faces[i].out);
+      if (regions && mesh.tet_region[faces[i].tet] != mesh.tet_region[faces[i + 1].tet]) ifc.push_back(faces[i].out);
       if (same_cycle(faces[i].out, faces[i + 1].out) && same_side++ < kShow)
         same_ex << " tets " << faces[i].tet << "/" << faces[i + 1].tet;
     } else if (overfull++ < kShow) {
@@ -228,64 +222,70 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
     c.failures.push_back(std::to_string(overfull) + " face(s) shared by more than two tets, e.g." + over_ex.str());
   if (same_side)
     c.failures.push_back(std::to_string(same_side) + " face(s) whose two tets lie on the same side (overlap), e.g." + same_ex.str());
-  {
-    // The mesher's own boundary list must be exactly these faces.
-    std::vector<std::array<std::uint32_t, 3>> a, b;
-    for (auto f : bnd) std::sort(f.begin(), f.end()), a.push_back(f);
-    for (std::size_t k = 0; k + 2 < mesh.boundary.size(); k += 3) {
-      std::array<std::uint32_t, 3> f = {mesh.boundary[k], mesh.boundary[k + 1], mesh.boundary[k + 2]};
-      std::sort(f.begin(), f.end());
-      b.push_back(f);
-    }
-    std::sort(a.begin(), a.end());
-    std::sort(b.begin(), b.end());
-    if (a != b)
-      c.failures.push_back("the mesh's boundary list (" + std::to_string(b.size()) +
-                           " faces) differs from the faces found in its tets (" + std::to_string(a.size()) + ")");
+  std::vector<Tri> a, b;
+  for (Tri f : bnd) std::sort(f.begin(), f.end()), a.push_back(f);
+  for (std::size_t k = 0; k + 2 < mesh.boundary.size(); k += 3) {
+    Tri f = {mesh.boundary[k], mesh.boundary[k + 1], mesh.boundary[k + 2]};
+    std::sort(f.begin(), f.end());
+    b.push_back(f);
   }
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  if (a != b)
+    c.failures.push_back("the mesh's boundary list (" + std::to_string(b.size()) +
+                         " faces) differs from the faces found in its tets (" + std::to_string(a.size()) + ")");
+  return {std::move(bnd), std::move(ifc)};
+}
 
-  // ---- boundary vertices on the surface ----
-  double diag = 0;
-  for (int k = 0; k < 3; ++k) diag += (surface.bbox_max[k] - surface.bbox_min[k]) * (surface.bbox_max[k] - surface.bbox_min[k]);
-  diag = std::sqrt(diag);
+/// A point's distance to one facet bounds its distance to the surface from above. Where that
+/// bound through the facet the node records is already within `on_surface`, the point passes
+/// without a tree query; otherwise (and for every failure reported) the distance is the
+/// tree's. A convex function's maximum over a triangle is at a corner, so a boundary face whose
+/// three corners are that close to one facet is as close everywhere: planar parts, most of a
+/// CAD model's boundary, need no query at all.
+struct FacetBound {
+  const SurfaceMesh& sm;
+  const std::vector<std::uint32_t>& node_facet;
+  double on_surface;
+
+  double operator()(const double* x, std::uint32_t f) const {
+    if (f >= sm.num_tris()) return std::numeric_limits<double>::infinity();
+    const std::uint32_t* t = sm.tri(f);
+    return triangle_distance(x, sm.points.p(t[0]), sm.points.p(t[1]), sm.points.p(t[2]));
+  }
+  std::uint32_t facet_of(std::uint32_t v) const { return v < node_facet.size() ? node_facet[v] : kNoFacet; }
+};
+
+/// Boundary vertices on the surface (within on_surface).
+void check_boundary_vertices(const VolumeMesh& mesh, const Domain& domain, const std::vector<Tri>& bnd,
+                             const FacetBound& bound, MeshCheck& c) {
+  const PointSet& pts = mesh.nodes.points;
   std::vector<std::uint32_t> bverts;
   for (auto& f : bnd) bverts.insert(bverts.end(), f.begin(), f.end());
   std::sort(bverts.begin(), bverts.end());
   bverts.erase(std::unique(bverts.begin(), bverts.end()), bverts.end());
-  // A point's distance to one facet bounds its distance to the surface from above. Where that
-  // bound through the facet the node records is already within kOnSurfaceDistance, the point
-  // passes without a tree query; otherwise (and for every failure reported) the distance is
-  // the tree's. A convex function's maximum over a triangle is at a corner, so a boundary face
-  // whose three corners are that close to one facet is as close everywhere (below): planar
-  // parts, most of a CAD model's boundary, need no query at all.
-  const double on_surface = kOnSurfaceDistance * diag;
-  const SurfaceMesh& sm = surface.mesh;
-  auto facet_bound = [&](const double* x, std::uint32_t f) {
-    if (f >= sm.num_tris()) return std::numeric_limits<double>::infinity();
-    const std::uint32_t* t = sm.tri(f);
-    return triangle_distance(x, sm.points.p(t[0]), sm.points.p(t[1]), sm.points.p(t[2]));
-  };
-  const std::vector<std::uint32_t>& node_facet = mesh.nodes.facet;
-  auto facet_of = [&](std::uint32_t v) { return v < node_facet.size() ? node_facet[v] : kNoFacet; };
   std::vector<double> vdist(bverts.size());
   parallel_for(bverts.size(), [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t k = b; k < e; ++k) {
       const double* x = pts.p(bverts[k]);
-      const double bound = facet_bound(x, facet_of(bverts[k]));
-      vdist[k] = bound <= on_surface ? bound : query.distance(x);
+      const double d = bound(x, bound.facet_of(bverts[k]));
+      vdist[k] = d <= bound.on_surface ? d : domain.query.distance(x);
     }
   }, 256);
-  {
-    std::ostringstream ex;
-    for (std::size_t k = 0; k < bverts.size(); ++k)
-      if (vdist[k] > kOnSurfaceDistance * diag && c.offsurface_vertices++ < kShow)
-        ex << " " << bverts[k] << " at " << xyz(pts.p(bverts[k])) << " (distance " << vdist[k] << ")";
-    if (c.offsurface_vertices)
-      c.failures.push_back(std::to_string(c.offsurface_vertices) +
-                           " boundary vertex(es) off the surface (> 1e-9 x bbox diagonal), e.g." + ex.str());
-  }
+  std::ostringstream ex;
+  for (std::size_t k = 0; k < bverts.size(); ++k)
+    if (vdist[k] > bound.on_surface && c.offsurface_vertices++ < kShow)
+      ex << " " << bverts[k] << " at " << xyz(pts.p(bverts[k])) << " (distance " << vdist[k] << ")";
+  if (c.offsurface_vertices)
+    c.failures.push_back(std::to_string(c.offsurface_vertices) +
+                         " boundary vertex(es) off the surface (> 1e-9 x bbox diagonal), e.g." + ex.str());
+}
 
-  // ---- boundary faces within tolerance: 7 sample points per face, distance / h(centroid) ----
+/// Each boundary face's distance from the surface, in units of h at its centroid: the largest
+/// over 7 samples (worst_sample), or the corners' bound through one facet (FacetBound).
+std::vector<double> check_boundary_faces(const VolumeMesh& mesh, const Domain& domain, const std::vector<Tri>& bnd,
+                                         const FacetBound& bound, const MeshCheckOptions& options, MeshCheck& c) {
+  const PointSet& pts = mesh.nodes.points;
   std::vector<double> fdist(bnd.size());
   parallel_for(bnd.size(), [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t k = b; k < e; ++k) {
@@ -293,98 +293,101 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
       double cen[3];
       for (int q = 0; q < 3; ++q) cen[q] = (p0[q] + p1[q] + p2[q]) / 3;
       // All three corners within on_surface of one facet their nodes record: the whole face is.
-      double bound = std::numeric_limits<double>::infinity();
-      for (int i = 0; i < 3 && !(bound <= on_surface); ++i) {
-        const std::uint32_t f = facet_of(bnd[k][i]);
+      double d = std::numeric_limits<double>::infinity();
+      for (int i = 0; i < 3 && !(d <= bound.on_surface); ++i) {
+        const std::uint32_t f = bound.facet_of(bnd[k][i]);
         if (f == kNoFacet) continue;
-        bound = std::max({facet_bound(p0, f), facet_bound(p1, f), facet_bound(p2, f)});
+        d = std::max({bound(p0, f), bound(p1, f), bound(p2, f)});
       }
-      if (bound <= on_surface) {
-        fdist[k] = bound / sizing(cen);
-        continue;
-      }
-      const double worst = worst_sample(p0, p1, p2, [&](const double* x) { return query.distance(x); });
-      fdist[k] = worst / sizing(cen);
+      if (!(d <= bound.on_surface)) d = worst_sample(p0, p1, p2, [&](const double* x) { return domain.query.distance(x); });
+      fdist[k] = d / domain.sizing(cen);
     }
   }, 256);
-  {
-    std::ostringstream ex;
-    for (std::size_t k = 0; k < bnd.size(); ++k) {
-      c.max_hausdorff = std::max(c.max_hausdorff, fdist[k]);
-      if (fdist[k] > options.hausdorff_tolerance && c.offsurface_faces++ < kShow) {
-        double cen[3];
-        for (int q = 0; q < 3; ++q) cen[q] = (pts.p(bnd[k][0])[q] + pts.p(bnd[k][1])[q] + pts.p(bnd[k][2])[q]) / 3;
-        ex << " face at " << xyz(cen) << " (" << fdist[k] << " h)";
-      }
+  std::ostringstream ex;
+  for (std::size_t k = 0; k < bnd.size(); ++k) {
+    c.max_hausdorff = std::max(c.max_hausdorff, fdist[k]);
+    if (fdist[k] > options.hausdorff_tolerance && c.offsurface_faces++ < kShow) {
+      double cen[3];
+      for (int q = 0; q < 3; ++q) cen[q] = (pts.p(bnd[k][0])[q] + pts.p(bnd[k][1])[q] + pts.p(bnd[k][2])[q]) / 3;
+      ex << " face at " << xyz(cen) << " (" << fdist[k] << " h)";
     }
-    if (c.offsurface_faces)
-      c.failures.push_back(std::to_string(c.offsurface_faces) + " boundary face(s) farther than " +
-                           std::to_string(options.hausdorff_tolerance) + " h from the surface, e.g." + ex.str());
   }
+  if (c.offsurface_faces)
+    c.failures.push_back(std::to_string(c.offsurface_faces) + " boundary face(s) farther than " +
+                         std::to_string(options.hausdorff_tolerance) + " h from the surface, e.g." + ex.str());
+  return fdist;
+}
 
-  // ---- open / non-manifold edges, non-manifold vertices ----
-  {
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
-    for (auto& f : bnd)
-      for (int j = 0; j < 3; ++j) edges.push_back(std::minmax(f[j], f[(j + 1) % 3]));
-    std::sort(edges.begin(), edges.end());
-    std::ostringstream ex;
-    for (std::size_t i = 0; i < edges.size();) {
-      std::size_t j = i;
-      while (j < edges.size() && edges[j] == edges[i]) ++j;
-      if (j - i != 2 && c.open_edges++ < kShow)
-        ex << " " << xyz(pts.p(edges[i].first)) << "-" << xyz(pts.p(edges[i].second)) << " in " << (j - i) << " face(s)";
-      i = j;
-    }
-    if (c.open_edges)
-      c.failures.push_back(std::to_string(c.open_edges) + " boundary edge(s) not in exactly two boundary faces, e.g." + ex.str());
+/// Boundary edges in exactly two boundary faces.
+void check_open_edges(const PointSet& pts, const std::vector<Tri>& bnd, MeshCheck& c) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+  for (auto& f : bnd)
+    for (int j = 0; j < 3; ++j) edges.push_back(std::minmax(f[j], f[(j + 1) % 3]));
+  std::sort(edges.begin(), edges.end());
+  std::ostringstream ex;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    if (j - i != 2 && c.open_edges++ < kShow)
+      ex << " " << xyz(pts.p(edges[i].first)) << "-" << xyz(pts.p(edges[i].second)) << " in " << (j - i) << " face(s)";
+    i = j;
+  }
+  if (c.open_edges)
+    c.failures.push_back(std::to_string(c.open_edges) + " boundary edge(s) not in exactly two boundary faces, e.g." + ex.str());
+}
 
-    // A vertex's faces form one fan iff they are connected through edges at the vertex.
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> vf;
-    for (std::size_t k = 0; k < bnd.size(); ++k)
-      for (int j = 0; j < 3; ++j) vf.push_back({bnd[k][j], std::uint32_t(k)});
-    std::sort(vf.begin(), vf.end());
-    std::ostringstream vex;
-    std::vector<int> label;
-    for (std::size_t i = 0; i < vf.size();) {
-      std::size_t j = i;
-      while (j < vf.size() && vf[j].first == vf[i].first) ++j;
-      const std::uint32_t v = vf[i].first;
-      const std::size_t m = j - i;
-      label.assign(m, -1);
-      int fans = 0;
-      for (std::size_t s = 0; s < m; ++s) {
-        if (label[s] >= 0) continue;
-        label[s] = fans;
-        for (bool grew = true; grew;) {  // naive closure: m is small
-          grew = false;
-          for (std::size_t x = 0; x < m; ++x) {
-            if (label[x] != fans) continue;
-            for (std::size_t y = 0; y < m; ++y) {
-              if (label[y] >= 0) continue;
-              const auto& fx = bnd[vf[i + x].second];
-              const auto& fy = bnd[vf[i + y].second];
-              int shared = 0;  // vertices other than v in common
-              for (auto a : fx)
-                for (auto b : fy) shared += (a == b && a != v);
-              if (shared > 0) label[y] = fans, grew = true;
-            }
+/// Manifold boundary vertices: a vertex's faces form one fan iff they are connected through
+/// edges at the vertex.
+void check_vertex_fans(const PointSet& pts, const std::vector<Tri>& bnd, MeshCheck& c) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> vf;
+  for (std::size_t k = 0; k < bnd.size(); ++k)
+    for (int j = 0; j < 3; ++j) vf.push_back({bnd[k][j], std::uint32_t(k)});
+  std::sort(vf.begin(), vf.end());
+  std::ostringstream vex;
+  std::vector<int> label;
+  for (std::size_t i = 0; i < vf.size();) {
+    std::size_t j = i;
+    while (j < vf.size() && vf[j].first == vf[i].first) ++j;
+    const std::uint32_t v = vf[i].first;
+    const std::size_t m = j - i;
+    label.assign(m, -1);
+    int fans = 0;
+    for (std::size_t s = 0; s < m; ++s) {
+      if (label[s] >= 0) continue;
+      label[s] = fans;
+      for (bool grew = true; grew;) {  // naive closure: m is small
+        grew = false;
+        for (std::size_t x = 0; x < m; ++x) {
+          if (label[x] != fans) continue;
+          for (std::size_t y = 0; y < m; ++y) {
+            if (label[y] >= 0) continue;
+            const auto& fx = bnd[vf[i + x].second];
+            const auto& fy = bnd[vf[i + y].second];
+            int shared = 0;  // vertices other than v in common
+            for (auto a : fx)
+              for (auto b : fy) shared += (a == b && a != v);
+            if (shared > 0) label[y] = fans, grew = true;
           }
         }
-        ++fans;
       }
-      if (fans > 1 && c.nonmanifold_vertices++ < kShow)
-        vex << " " << v << " at " << xyz(pts.p(v)) << " (" << fans << " fans)";
-      i = j;
+      ++fans;
     }
-    if (c.nonmanifold_vertices)
-      c.failures.push_back(std::to_string(c.nonmanifold_vertices) + " non-manifold boundary vertex(es), e.g." + vex.str());
+    if (fans > 1 && c.nonmanifold_vertices++ < kShow)
+      vex << " " << v << " at " << xyz(pts.p(v)) << " (" << fans << " fans)";
+    i = j;
   }
+  if (c.nonmanifold_vertices)
+    c.failures.push_back(std::to_string(c.nonmanifold_vertices) + " non-manifold boundary vertex(es), e.g." + vex.str());
+}
 
-  // ---- interfaces: their vertices on them, their faces within tolerance (7 samples) ----
+/// Interfaces between touching bodies: their faces' vertices on them, their faces within the
+/// tolerance (7 samples); the centroids of the faces beyond it go to refine_at.
+void check_interfaces(const VolumeMesh& mesh, const Domain& domain, const std::vector<Tri>& ifc, double on_surface,
+                      const MeshCheckOptions& options, MeshCheck& c) {
+  const PointSet& pts = mesh.nodes.points;
+  const RegionQuery* rq = domain.regions;
   Stopwatch interface_clock;
   c.interface_faces = ifc.size();
-  std::vector<double> idist(ifc.size());
   if (rq && !ifc.empty()) {
     std::vector<std::uint32_t> iverts;
     for (auto& f : ifc) iverts.insert(iverts.end(), f.begin(), f.end());
@@ -399,13 +402,14 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
     if (c.offinterface_vertices)
       c.failures.push_back(std::to_string(c.offinterface_vertices) +
                            " interface vertex(es) off the interfaces (> 1e-9 x bbox diagonal), e.g." + vx.str());
+    std::vector<double> idist(ifc.size());
     parallel_for(ifc.size(), [&](std::size_t b, std::size_t e, unsigned) {
       for (std::size_t k = b; k < e; ++k) {
         const double *p0 = pts.p(ifc[k][0]), *p1 = pts.p(ifc[k][1]), *p2 = pts.p(ifc[k][2]);
         double cen[3];
         for (int q = 0; q < 3; ++q) cen[q] = (p0[q] + p1[q] + p2[q]) / 3;
         const double worst = worst_sample(p0, p1, p2, [&](const double* x) { return rq->interfaces().distance(x); });
-        idist[k] = worst / sizing(cen);
+        idist[k] = worst / domain.sizing(cen);
       }
     }, 256);
     std::ostringstream ex;
@@ -423,10 +427,15 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
                            std::to_string(options.hausdorff_tolerance) + " h from the interfaces, e.g." + ex.str());
   }
   c.interface_seconds = interface_clock.seconds();
+}
 
-  // ---- volume ----
-  c.volume_error = surface.volume != 0 ? std::fabs(c.mesh_volume - surface.volume) / std::fabs(surface.volume)
-                                       : std::fabs(c.mesh_volume);
+/// The volume against the solid's; where a finer size would help: the boundary faces beyond
+/// the tolerance and, when the volume is off, the 2% farthest from the surface (relative to h).
+void check_volume(const VolumeMesh& mesh, const Domain& domain, const std::vector<Tri>& bnd,
+                  const std::vector<double>& fdist, const MeshCheckOptions& options, MeshCheck& c) {
+  const PointSet& pts = mesh.nodes.points;
+  const double solid = domain.surface.volume;
+  c.volume_error = solid != 0 ? std::fabs(c.mesh_volume - solid) / std::fabs(solid) : std::fabs(c.mesh_volume);
   auto add_refine = [&](std::size_t k) {
     for (int q = 0; q < 3; ++q)
       c.refine_at.push_back((pts.p(bnd[k][0])[q] + pts.p(bnd[k][1])[q] + pts.p(bnd[k][2])[q]) / 3);
@@ -445,11 +454,37 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain,
   }
   if (c.volume_off) {
     std::ostringstream s;
-    s << "mesh volume " << c.mesh_volume << " differs from the solid's " << surface.volume << " by "
+    s << "mesh volume " << c.mesh_volume << " differs from the solid's " << solid << " by "
       << c.volume_error * 100 << "% (tolerance " << options.volume_tolerance * 100 << "%)";
     c.failures.push_back(s.str());
   }
-  if (nt == 0) c.failures.push_back("the mesh has no tets");
+}
+
+}  // namespace
+
+MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain, const MeshCheckOptions& options) {
+  MeshCheck c;
+  c.tets = mesh.num_tets();
+  c.solid_volume = domain.surface.volume;
+  if (!ids_valid(mesh, c)) return c;
+  const PointSet& pts = mesh.nodes.points;
+  // The faces, sorted by their vertex sets: matched below; the inside test uses the pairs.
+  const std::vector<Face> faces = sorted_faces(mesh.tets, pts.size());
+  check_tets(mesh, domain, faces, c);
+  const auto [bnd, ifc] = match_faces(mesh, domain, faces, c);
+  double diag = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double e = domain.surface.bbox_max[k] - domain.surface.bbox_min[k];
+    diag += e * e;
+  }
+  const FacetBound bound{domain.surface.mesh, mesh.nodes.facet, kOnSurfaceDistance * std::sqrt(diag)};
+  check_boundary_vertices(mesh, domain, bnd, bound, c);
+  const std::vector<double> fdist = check_boundary_faces(mesh, domain, bnd, bound, options, c);
+  check_open_edges(pts, bnd, c);
+  check_vertex_fans(pts, bnd, c);
+  check_interfaces(mesh, domain, ifc, bound.on_surface, options, c);
+  check_volume(mesh, domain, bnd, fdist, options, c);
+  if (c.tets == 0) c.failures.push_back("the mesh has no tets");
   return c;
 }
 
