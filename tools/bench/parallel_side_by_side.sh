@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Usage: bash tools/bench/parallel_side_by_side.sh [OUT_DIR] [N]   (KDMESH=path/to/kdmesh; ~6 min)
+# Usage: bash tools/bench/parallel_side_by_side.sh [OUT_DIR] [N]   (KDMESH=path/to/kdmesh; ~7 min)
 #        DISTS="cube axes" (default) or any of the seven distributions; REPS=3 (default)
 # SPDX-License-Identifier: AGPL-3.0-or-later
 # The kdmesh kernel with its default order (kd-bfs-hilbert) sequential (t1) and on two threads
@@ -9,7 +9,9 @@
 # distribution in DISTS from `kdmesh points --seed 1`. Separate processes, alternated REPS
 # times so that the machine's drift hits every column alike; each under /usr/bin/time -v.
 # Times are order + Delaunay as `kdmesh delaunay` reports them (CGAL: its insert(range), which
-# sorts internally). Writes summary.md (one row per process) to OUT_DIR.
+# sorts internally). pair-a and pair-b are two sequential runs started together, one per core:
+# each one's slowdown against t1 bounds what a second thread can give. Writes summary.md (one
+# row per process) to OUT_DIR.
 set -eu
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 K="$(realpath "${KDMESH:-$here/build/kdmesh}")"  # absolute: the runs cd to OUT_DIR
@@ -23,16 +25,26 @@ echo "|---|---|---|---|---|---|---|---|---|" >> summary.md
 for d in $dists; do
   [ -f $d.xyz ] || $K points --dist $d -n "$n" --seed 1 -o $d.xyz -q
   for rep in $(seq 1 "$reps"); do
-    for mode in t1 t2 kd-bfs stock cgal; do
+    for mode in t1 t2 kd-bfs stock cgal pair-a; do
       case $mode in
         t1) args=(--threads 1);;
         t2) args=(--threads 2);;
         kd-bfs) args=(--threads 1 --order kd-bfs);;
         stock) args=(--kernel cgal-plain --order cgal);;
         cgal) args=(--kernel cgal --order cgal);;
+        pair-a) args=(--threads 1);;
       esac
-      /usr/bin/time -v $K delaunay $d.xyz "${args[@]}" --json -q > $d-$mode-$rep.json 2> $d-$mode-$rep.time
-      python3 - "$d" "$mode" "$rep" >> summary.md <<'PY'
+      if [ "$mode" = pair-a ]; then
+        # Two sequential runs at once, one per core: how much the cores slow each other down
+        # (shared cache and memory), the ceiling of the two-thread speed-up.
+        /usr/bin/time -v $K delaunay $d.xyz "${args[@]}" --json -q > $d-pair-b-$rep.json 2> $d-pair-b-$rep.time &
+        /usr/bin/time -v $K delaunay $d.xyz "${args[@]}" --json -q > $d-$mode-$rep.json 2> $d-$mode-$rep.time
+        wait
+      else
+        /usr/bin/time -v $K delaunay $d.xyz "${args[@]}" --json -q > $d-$mode-$rep.json 2> $d-$mode-$rep.time
+      fi
+      for m in $mode $([ "$mode" = pair-a ] && echo pair-b); do
+      python3 - "$d" "$m" "$rep" >> summary.md <<'PY'
 import json, re, sys
 d, mode, rep = sys.argv[1:4]
 j = json.load(open(f"{d}-{mode}-{rep}.json"))
@@ -44,6 +56,7 @@ f = lambda k: ("%.2f" % c[k]) if k in c else ""
 print(f"| {j['points']} {d} | {mode} | {rep} | {total:.3f} | {rss} | {f('orient_tests_per_point')} | "
       f"{f('conflicts_per_point')} | {c.get('parallel_rounds', '')} | {c.get('deferrals', '')} |")
 PY
+      done
     done
   done
 done
