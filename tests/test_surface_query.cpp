@@ -54,44 +54,6 @@ SurfaceMesh sphere(double r, int levels) {
   return s;
 }
 
-TEST(SurfaceQuery, BoxCertificateIsExactlyTheFacetBoxOverlap) {
-  const SurfaceMesh s = sphere(10, 3);  // 512 facets
-  const SurfaceQuery q(s);
-  Rng rng(7);
-  int certified = 0, touching = 0;
-  for (int i = 0; i < 4000; ++i) {
-    double a[3], b[3];
-    const double len = i % 2 ? 0.05 : 2.0;  // short and long segments
-    for (int k = 0; k < 3; ++k) a[k] = rng.uniform(-12, 12), b[k] = a[k] + rng.uniform(-len, len);
-    // Brute force: some facet's closed box meets the segment's closed box.
-    bool overlap = false;
-    for (std::size_t f = 0; f < s.num_tris() && !overlap; ++f) {
-      bool all = true;
-      for (int k = 0; k < 3; ++k) {
-        double lo = 1e300, hi = -1e300;
-        for (int j = 0; j < 3; ++j) {
-          lo = std::min(lo, s.points.p(s.tri(f)[j])[k]);
-          hi = std::max(hi, s.points.p(s.tri(f)[j])[k]);
-        }
-        all = all && lo <= std::max(a[k], b[k]) && std::min(a[k], b[k]) <= hi;
-      }
-      overlap = all;
-    }
-    ASSERT_EQ(q.box_may_touch(a, b), overlap) << "segment " << i;
-    if (!overlap) {
-      // The certificate: both ends strictly on one side.
-      ASSERT_NE(q.side(a), 0);
-      ASSERT_EQ(q.side(a), q.side(b)) << "segment " << i;
-      ++certified;
-    } else {
-      ++touching;
-    }
-  }
-  // Both branches were exercised.
-  EXPECT_GT(certified, 100);
-  EXPECT_GT(touching, 100);
-}
-
 // The side of a point is exact at every magnitude. Points on a grid in a cube of side 2^k
 // include the centre and others whose vertical line meets the facets' diagonals, so the
 // inside test must fall back from the vertical direction to others. Up to issue 19 that
@@ -216,15 +178,15 @@ TEST(SurfaceQuery, ClearSegmentsJoinPointsOfOneSide) {
   EXPECT_GT(blocked_same_side, 10);
 }
 
-TEST(SurfaceQuery, BoxesTouchingAtOnePointCount) {
-  // A facet corner at (10, 0, 0): a segment ending exactly there, or whose box reaches that
-  // coordinate from outside, must be reported (closed boxes).
+TEST(SurfaceQuery, SegmentsTouchingTheSurfaceAtOnePointAreNotClear) {
+  // A facet corner at (10, 0, 0): a segment ending exactly there meets the (closed) facets;
+  // one ending just outside does not.
   const SurfaceMesh s = sphere(10, 0);
   const SurfaceQuery q(s);
   const double a[3] = {12, 0, 0}, corner[3] = {10, 0, 0}, near[3] = {10.000001, 0, 0};
-  EXPECT_TRUE(q.box_may_touch(a, corner));
-  EXPECT_FALSE(q.box_may_touch(a, near));
-  EXPECT_TRUE(q.box_may_touch(corner, corner));  // a point on the surface
+  EXPECT_FALSE(q.segment_clear(a, corner));
+  EXPECT_TRUE(q.segment_clear(a, near));
+  EXPECT_FALSE(q.segment_clear(corner, corner));  // a point on the surface
 }
 
 }  // namespace

@@ -635,8 +635,12 @@ TEST(VolumeMesh, CheckFacetCertificateGivesTheTreeQueriesFigures) {
       on_one_facet += f0 == vm.nodes.facet[vm.boundary[k + 1]] && f0 == vm.nodes.facet[vm.boundary[k + 2]];
     }
     EXPECT_NEAR(c.max_hausdorff, worst, 1e-12) << levels;
-    if (levels == 2) EXPECT_GT(on_one_facet, 0u);
-    if (levels == 4) EXPECT_GT(worst, 1e-3);
+    if (levels == 2) {
+      EXPECT_GT(on_one_facet, 0u);
+    }
+    if (levels == 4) {
+      EXPECT_GT(worst, 1e-3);
+    }
   }
 }
 

@@ -177,9 +177,8 @@ using Primitive = ray_parity::Primitive;
 using Tree = ray_parity::Tree;
 }  // namespace
 
-/// Facet bounding boxes binned on a uniform grid: which facets a small box may touch, with
-/// exact comparisons only (cell indices are a monotone function of a coordinate, so a facet
-/// box and a query box that overlap share a cell).
+/// The facets binned on a uniform grid by where their triangles come near a cell
+/// (register_triangles): the facets near a small box, and the nearest facet of a point.
 class BoxGrid {
  public:
   void build(const Triangles& tris) {
@@ -202,20 +201,6 @@ class BoxGrid {
       n_[k] = int(std::clamp(ext[k] / cell, 1.0, 128.0));
       inv_[k] = ext[k] > 0 ? double(n_[k]) / ext[k] : 0;
     }
-    std::vector<std::uint32_t> count(std::size_t(n_[0]) * n_[1] * n_[2] + 1, 0);
-    auto each_cell = [&](const double* b, auto&& f) {
-      int a[3], z[3];
-      for (int k = 0; k < 3; ++k) a[k] = index(k, b[k]), z[k] = index(k, b[3 + k]);
-      for (int i = a[0]; i <= z[0]; ++i)
-        for (int j = a[1]; j <= z[1]; ++j)
-          for (int l = a[2]; l <= z[2]; ++l) f((std::size_t(l) * n_[1] + j) * n_[0] + i);
-    };
-    for (const auto& b : boxes_) each_cell(b.data(), [&](std::size_t c) { ++count[c + 1]; });
-    for (std::size_t c = 1; c < count.size(); ++c) count[c] += count[c - 1];
-    start_ = count;
-    items_.resize(count.back());
-    for (std::uint32_t f = 0; f < boxes_.size(); ++f)
-      each_cell(boxes_[f].data(), [&](std::size_t c) { items_[count[c]++] = f; });
     corners_.resize(9 * tris.size());
     for (std::size_t f = 0; f < tris.size(); ++f)
       for (int v = 0; v < 3; ++v)
@@ -242,7 +227,7 @@ class BoxGrid {
     min_cell_ = std::numeric_limits<double>::infinity();
     for (int k = 0; k < 3; ++k)
       if (inv_[k] > 0) min_cell_ = std::min(min_cell_, 1 / inv_[k]);
-    register_triangles(count.size() - 1);
+    register_triangles(std::size_t(n_[0]) * n_[1] * n_[2]);
   }
 
   /// Each facet also in the cells its triangle comes near, not only its box: a long
@@ -395,27 +380,6 @@ class BoxGrid {
       if (r == max_ring) return std::numeric_limits<double>::quiet_NaN();
     }
   }
-  /// False when no facet's (closed) box meets the closed box [a, b] (per axis a <= b).
-  bool may_touch(const double* a, const double* b) const {
-    int ia[3], ib[3];
-    for (int k = 0; k < 3; ++k) {
-      if (b[k] < lo_[k] || a[k] > hi_[k]) return false;
-      ia[k] = index(k, a[k]), ib[k] = index(k, b[k]);
-    }
-    for (int i = ia[0]; i <= ib[0]; ++i)
-      for (int j = ia[1]; j <= ib[1]; ++j)
-        for (int l = ia[2]; l <= ib[2]; ++l) {
-          const std::size_t c = (std::size_t(l) * n_[1] + j) * n_[0] + i;
-          for (std::uint32_t x = start_[c]; x < start_[c + 1]; ++x) {
-            const std::array<double, 6>& f = boxes_[items_[x]];
-            if (f[0] <= b[0] && a[0] <= f[3] && f[1] <= b[1] && a[1] <= f[4] && f[2] <= b[2] &&
-                a[2] <= f[5])
-              return true;
-          }
-        }
-    return false;
-  }
-
  private:
   int index(int k, double x) const {
     return std::clamp(int(std::floor((x - lo_[k]) * inv_[k])), 0, n_[k] - 1);
@@ -427,7 +391,6 @@ class BoxGrid {
   std::vector<double> corners_;  // 3 x 3 coordinates per facet
   std::vector<double> planes_;   // per facet: unit normal, offset, rounding slack (2 terms)
   std::vector<std::uint32_t> tstart_, titems_;  // per cell: the facets whose triangle comes near it
-  std::vector<std::uint32_t> start_, items_;
 };
 
 struct SurfaceQuery::Impl {
@@ -470,12 +433,6 @@ double SurfaceQuery::closest(const double* p, double* out, std::uint32_t* facet)
   out[2] = c.z();
   if (facet) *facet = std::uint32_t(id - impl_->triangles.cbegin());
   return std::sqrt(CGAL::squared_distance(q, c));
-}
-
-bool SurfaceQuery::box_may_touch(const double* a, const double* b) const {
-  double lo[3], hi[3];
-  for (int k = 0; k < 3; ++k) lo[k] = std::min(a[k], b[k]), hi[k] = std::max(a[k], b[k]);
-  return impl_->boxes.may_touch(lo, hi);
 }
 
 bool SurfaceQuery::segment_clear(const double* a, const double* b) const {

@@ -34,13 +34,9 @@ class SurfaceQuery {
   /// null; kNoFacet when none).
   double ray_distance(const double* origin, const double* dir, std::uint32_t skip,
                       std::uint32_t* hit = nullptr) const;
-  /// False only if no facet's bounding box meets the box spanned by a and b (exact
-  /// comparisons). Then the segment ab does not meet the surface, so a and b lie strictly on
-  /// the same side: a cheap way to carry a known side along a short move.
-  bool box_may_touch(const double* a, const double* b) const;
-  /// True when the closed segment ab meets no closed facet (exact predicates; the facet box
+  /// True when the closed segment ab meets no closed facet (exact predicates; the facet
   /// grid first). Then a and b lie strictly on the same side: the way to carry a known side
-  /// between nearby points that box_may_touch cannot separate.
+  /// between nearby points.
   bool segment_clear(const double* a, const double* b) const;
 
  private:

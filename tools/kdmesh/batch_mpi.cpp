@@ -13,6 +13,8 @@
 #include <cstdlib>
 #include <string>
 
+#include <limits>
+
 #include "core/error.h"
 #include "tools/app/job_process.h"
 
@@ -115,12 +117,32 @@ bool mpi_available() {
 #endif
 }
 
+int mpi_first_failed_rank(bool ok) {
+#ifdef KDMESH_WITH_MPI
+  int initialized = 0;
+  MPI_Initialized(&initialized);
+  if (!initialized) check(MPI_Init(nullptr, nullptr), "MPI_Init");
+  int rank = 0, first = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  const int mine = ok ? std::numeric_limits<int>::max() : rank;
+  check(MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD), "MPI_Allreduce");
+  if (first == std::numeric_limits<int>::max()) return -1;
+  MPI_Finalize();
+  return first;
+#else
+  (void)ok;
+  return -1;
+#endif
+}
+
 std::vector<MeshJobResult> run_jobs_over_mpi(const std::vector<MeshJob>& jobs, const std::vector<std::size_t>& order,
                                              const std::function<MeshJobCallbacks(std::size_t)>& callbacks,
                                              const std::function<void(std::size_t, const MeshJobResult&)>& done,
                                              bool* root) {
 #ifdef KDMESH_WITH_MPI
-  check(MPI_Init(nullptr, nullptr), "MPI_Init");
+  int initialized = 0;
+  MPI_Initialized(&initialized);
+  if (!initialized) check(MPI_Init(nullptr, nullptr), "MPI_Init");
   int size = 1, rank = 0;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);

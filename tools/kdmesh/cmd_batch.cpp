@@ -90,7 +90,9 @@ void print_table(std::ostream& os, const std::vector<MeshJobResult>& results) {
   }
 }
 
-int run_batch_as(const Options& o, const MpiWorld& world) {
+/// The batch as rank `world.rank` of `world.size`; sets *agreed once the ranks of an MPI run
+/// have agreed that their set-up succeeded (run_batch).
+int run_batch_as(const Options& o, const MpiWorld& world, bool* agreed) {
   const Output& out = o.out;
   Stopwatch total;
   BatchLoadOptions lo;
@@ -163,6 +165,8 @@ int run_batch_as(const Options& o, const MpiWorld& world) {
     bool root = false;
     const std::vector<std::size_t> order =
         world.rank == 0 ? largest_first(estimate_job_costs(jobs)) : std::vector<std::size_t>{};
+    *agreed = true;
+    if (mpi_first_failed_rank(true) >= 0) return 0;  // the rank that failed reports it
     results = run_jobs_over_mpi(jobs, order, callbacks, done, &root);
     if (!root) return 0;  // rank 0 reports the batch and its exit code
   } else {
@@ -200,13 +204,22 @@ int run_batch_as(const Options& o, const MpiWorld& world) {
 }
 
 /// Under mpirun every rank reads the same command line and configuration, so an error before
-/// the ranks split the work is the same on each: rank 0 reports it, the others exit with its
-/// code quietly (N copies of one message before).
+/// the ranks split the work is usually the same on each (N copies of one message before).
+/// The ranks agree on the outcome of their set-up (mpi_first_failed_rank): the lowest rank
+/// that failed reports its error and exits with its code; the others exit 0, quietly, so that
+/// mpirun's exit code is the error's and no rank's exit ends the job before the report is out
+/// (the others exiting with the code first let mpirun kill rank 0 before it wrote: 1 run in
+/// ~20 on CI's 2 cores). Without MPI, rank 0 reports and the others exit with the code.
 int run_batch(const Options& o) {
   const MpiWorld world = mpi_world_from_environment();
+  bool agreed = false;
   try {
-    return run_batch_as(o, world);
+    return run_batch_as(o, world, &agreed);
   } catch (const Error& e) {
+    if (world.size > 1 && mpi_available() && !agreed) {
+      if (mpi_first_failed_rank(false) != world.rank) return 0;
+      throw;
+    }
     if (world.size > 1 && world.rank != 0) return int(e.code());
     throw;
   }
