@@ -10,7 +10,9 @@
 #     5.5 returned 4864 tets instead of 4794 for the block's cospherical lattice nodes);
 #  2. kdmesh mesh on an open surface: the refusal path (exit 4 expected);
 #  3. kdmesh delaunay --check on 3000 random points (TetGen and CGAL, no near-ties), writing a VTU;
-#  4. kdmesh batch with one good and one bad job: the parent process (fork, pipes, results).
+#  4. kdmesh delaunay --threads 2 on 45,000 points: the kernel's parallel rounds, whose tet
+#     slots are left unwritten until a worker fills them or marks them dead (UninitAllocator);
+#  5. kdmesh batch with one good and one bad job: the parent process (fork, pipes, results).
 #     The children run the code of (1) and (2); they end with _Exit, so their reachable
 #     memory would show up as leaks: they are not traced.
 set -euo pipefail
@@ -55,6 +57,8 @@ run 0 "${vg[@]}" "$k" mesh "$here/models/block/block.stl" --size 25 --refine-edg
 run 4 "${vg[@]}" "$k" mesh "$out/open.stl" --size 25 -o "$out/open.vtu" -q
 "$k" points -n 3000 -o "$out/p.xyz" -q >/dev/null
 run 0 "${vg[@]}" "$k" delaunay "$out/p.xyz" --check -o "$out/p.vtu" -q
+"$k" points -n 45000 --seed 3 -o "$out/q.xyz" -q >/dev/null
+run 0 "${vg[@]}" "$k" delaunay "$out/q.xyz" --threads 2 -o "$out/q.vtu" -q
 run 4 "${vg[@]}" "$k" batch "$out/jobs.yaml" --jobs 2 --out-dir "$out" -q
 test -f "$out/good.vtu" && test ! -e "$out/bad.vtu"
 echo "memcheck: all runs clean"
