@@ -14,6 +14,7 @@
 #include <string>
 
 #include <limits>
+#include <utility>
 
 #include "core/error.h"
 #include "tools/app/job_process.h"
@@ -117,13 +118,25 @@ bool mpi_available() {
 #endif
 }
 
-int mpi_first_failed_rank(bool ok) {
 #ifdef KDMESH_WITH_MPI
+namespace {
+/// MPI_COMM_WORLD's rank and size, initialising MPI once (both entry points below may).
+std::pair<int, int> init_world() {
   int initialized = 0;
   MPI_Initialized(&initialized);
   if (!initialized) check(MPI_Init(nullptr, nullptr), "MPI_Init");
-  int rank = 0, first = 0;
+  int size = 1, rank = 0;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  return {rank, size};
+}
+}  // namespace
+#endif
+
+int mpi_first_failed_rank(bool ok) {
+#ifdef KDMESH_WITH_MPI
+  const int rank = init_world().first;
+  int first = 0;
   const int mine = ok ? std::numeric_limits<int>::max() : rank;
   check(MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD), "MPI_Allreduce");
   if (first == std::numeric_limits<int>::max()) return -1;
@@ -140,12 +153,7 @@ std::vector<MeshJobResult> run_jobs_over_mpi(const std::vector<MeshJob>& jobs, c
                                              const std::function<void(std::size_t, const MeshJobResult&)>& done,
                                              bool* root) {
 #ifdef KDMESH_WITH_MPI
-  int initialized = 0;
-  MPI_Initialized(&initialized);
-  if (!initialized) check(MPI_Init(nullptr, nullptr), "MPI_Init");
-  int size = 1, rank = 0;
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  const auto [rank, size] = init_world();
   *root = rank == 0;
   std::vector<MeshJobResult> results;
   try {
