@@ -442,6 +442,25 @@ TEST(KdOrder, MatchesNaiveOnDistributions) {
   expect_matches_naive(generate_points(Distribution::axes, 70000, 4), "axes 70000");
 }
 
+// `--threads 1` measured a one-thread kernel beside a kd order built on two threads (the
+// copy, the halves below the root and the Hilbert keys). OrderOptions::threads = 1 now keeps
+// it on the calling thread; the orders must not change with it.
+TEST(KdOrder, RegressionOneThreadOrderEqualsTheTwoThreadOne) {
+  const PointSet ps = generate_points(Distribution::cube, 70000, 5);  // >= 2^16: two threads
+  for (const OrderKind kind : {OrderKind::kd_bfs, OrderKind::kd_bfs_alt, OrderKind::kd_bfs_hilbert,
+                               OrderKind::kd_local}) {
+    OrderOptions o;
+    o.kind = kind;
+    const Ordering two = make_order(ps, o);
+    o.threads = 1;
+    const Ordering one = make_order(ps, o);
+    ASSERT_EQ(one.order.size(), ps.size());
+    EXPECT_EQ(one.order, two.order) << order_kind_name(kind);
+    EXPECT_EQ(one.hint, two.hint) << order_kind_name(kind);
+    EXPECT_EQ(one.level, two.level) << order_kind_name(kind);
+  }
+}
+
 TEST(KdOrder, MatchesNaiveOnAwkwardCoordinates) {
   Rng rng(7);
   PointSet spread;  // coordinates spanning hundreds of binades (bucket refinement fallback)

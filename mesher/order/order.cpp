@@ -103,17 +103,18 @@ Ordering make_order(const PointSet& points, const OrderOptions& options) {
   Ordering out;
   switch (options.kind) {
     case OrderKind::kd_bfs:
-      out = detail::make_kd_order(points, false);
+      out = detail::make_kd_order(points, false, options.threads);
       break;
     case OrderKind::kd_bfs_alt:
-      out = detail::make_kd_order(points, true);
+      out = detail::make_kd_order(points, true, options.threads);
       break;
     case OrderKind::kd_bfs_hilbert:
-      out = detail::make_kd_hilbert_order(points);
+      out = detail::make_kd_hilbert_order(points, options.threads);
       break;
     case OrderKind::kd_local:
       if (options.local_points == 0) throw UsageError("kd-local subtree size must be positive");
-      out = detail::make_kd_local_order(detail::make_kd_order(points, false), options.local_points);
+      out = detail::make_kd_local_order(detail::make_kd_order(points, false, options.threads),
+                                       options.local_points);
       break;
     case OrderKind::hilbert: {
       out.order = identity(n);

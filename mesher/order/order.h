@@ -30,6 +30,10 @@ struct OrderOptions {
   std::uint64_t seed = 1;      ///< for random and brio
   double brio_ratio = 0.125;   ///< fraction of points in each round relative to the next
   std::size_t local_points = 4096;  ///< kd_local: largest subtree inserted as one block
+  /// 1: the kd orders are built on the calling thread alone; otherwise inputs of 64k points
+  /// and more use a second thread (copy, the two halves below the root, Hilbert keys). The
+  /// order is the same either way.
+  unsigned threads = 0;
 };
 
 /// Builds the insertion order of `points`. Deterministic for given points and options.

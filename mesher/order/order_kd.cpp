@@ -373,9 +373,10 @@ class KdBuilder {
 
 }  // namespace
 
-Ordering make_kd_order(const PointSet& points, bool alternate) {
+Ordering make_kd_order(const PointSet& points, bool alternate, unsigned threads) {
   Ordering out;
   const std::size_t n = points.size();
+  const bool two_threads = threads != 1 && n >= kThreadThreshold;
   if (n == 0) return out;
   if (n >= std::size_t(kNoHint)) throw UsageError("kd order: too many points for 32-bit ids");
 
@@ -394,7 +395,7 @@ Ordering make_kd_order(const PointSet& points, bool alternate) {
     for (std::size_t i = begin; i < end; i += kPerPage) scratch[i].id = 0;
   };
   bool filled = false;
-  if (n >= kThreadThreshold) {
+  if (two_threads) {
     try {
       std::thread helper(fill, n / 2, n);
       fill(0, n / 2);
@@ -408,7 +409,7 @@ Ordering make_kd_order(const PointSet& points, bool alternate) {
   std::vector<std::uint8_t> depths(n);
   const KdBuilder builder(alternate, NodeArrays{ids.data(), parents.data(), depths.data()});
   const Box root_box = alternate ? Box{} : bounding_box(work.get(), n);
-  builder.build(work.get(), scratch.get(), 0, n, 0, kNoHint, root_box, n >= kThreadThreshold);
+  builder.build(work.get(), scratch.get(), 0, n, 0, kNoHint, root_box, two_threads);
   work.reset();
   scratch.reset();
 

@@ -65,13 +65,14 @@ void sort_level(std::uint32_t* ids, std::uint32_t* hints, std::size_t m, const s
 }
 }  // namespace
 
-Ordering make_kd_hilbert_order(const PointSet& points) {
+Ordering make_kd_hilbert_order(const PointSet& points, unsigned threads) {
   // The keys are computed beside the tree's first, single-threaded partition. (std::async:
   // an exception reaches get(), and the future waits for its task if the tree throws.)
-  const auto launch = points.size() >= kThreadThreshold ? std::launch::async : std::launch::deferred;
+  const auto launch = threads != 1 && points.size() >= kThreadThreshold ? std::launch::async
+                                                                       : std::launch::deferred;
   std::future<std::vector<std::uint64_t>> key_task =
       std::async(launch, [&points] { return hilbert::point_keys(points); });
-  Ordering bfs = make_kd_order(points, false);
+  Ordering bfs = make_kd_order(points, false, threads);
   std::vector<std::uint64_t> keys = key_task.get();
   const std::size_t n = bfs.order.size();
   bfs.name = "kd-bfs-hilbert";

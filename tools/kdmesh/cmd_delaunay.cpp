@@ -95,7 +95,11 @@ int run_delaunay(const Options& o) {
   if (o.threads != 1 && o.kernel != "kdmesh")
     throw UsageError("--threads applies to --kernel kdmesh (CGAL and TetGen run sequentially here)");
   Ordering ord;
-  if (!cgal_sort) ord = make_order(pts, {parse_order_kind(o.order), o.seed, 0.125});
+  if (!cgal_sort) {
+    OrderOptions oo{parse_order_kind(o.order), o.seed, 0.125};
+    oo.threads = o.threads == 1 ? 1 : 0;  // --threads 1: the order too is built on one thread
+    ord = make_order(pts, oo);
+  }
   const double t_order = clock.seconds();
 
   clock.reset();
@@ -268,7 +272,7 @@ void add_delaunay_command(CLI::App& app, Runner& run) {
   cmd->add_option("--seed", o->seed, "Seed of the random and brio orders")->capture_default_str();
   cmd->add_option("--threads", o->threads,
                   "kdmesh kernel: inserting threads (0 = one per hardware thread); the tets are "
-                  "the same for any count")
+                  "the same for any count. With 1, the insertion order is built on one thread too")
       ->capture_default_str();
   cmd->add_flag("--check", o->check,
                 "Verify: exact validity, then compare with TetGen 1.5 and CGAL 5.5; exit 5 on mismatch");

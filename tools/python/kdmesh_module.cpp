@@ -195,6 +195,7 @@ py::tuple delaunay_tets(py::array_t<double, py::array::c_style | py::array::forc
   OrderOptions oo;
   oo.kind = parse_order_kind(order);
   oo.seed = seed;
+  oo.threads = threads == 1 ? 1 : 0;
   DelaunayOptions dopt;
   dopt.threads = threads;
   DelaunayResult r;

@@ -235,6 +235,7 @@ RunMeasurement measure_run(const RunSpec& s) {
   if (s.count && s.kernel != "cgal") throw UsageError("bench-run: --count is for --kernel cgal");
   OrderOptions oo;
   if (!own_order) oo = {parse_order_kind(s.order), s.seed ^ kOrderSeedMix, 0.125};
+  oo.threads = 1;  // the kernels run on one thread here, and so does the order
 
   const PointSet pts = generate_points(d, s.n, s.seed);
   RunMeasurement m;
