@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/rng.h"
 #include "mesher/placement/edge_sampling.h"
 #include "mesher/placement/interior_fill.h"
 #include "mesher/placement/node_placement.h"
@@ -416,6 +417,84 @@ TEST(NodePlacement, RegressionHomerFeatureCurvesAtASmallAngleKeepTheirNodesApart
   EXPECT_GE(far_a, 3);
   EXPECT_GE(far_b, 3);
   EXPECT_LT(thinned.size_count(), all.size_count());
+}
+
+// SpacingGrid::conflicts against brute force, with and without the Lipschitz bound: nodes
+// whose sizes follow a graded field h(x) = h0 + g |x - c| (stored as floats, as a NodeSet
+// keeps them; sizes over seven grid levels), placed by dart throwing at beta 0.75 as the
+// interior fill does, then queried at random points with the field's size there, at betas
+// from 0.3 to 1. The bound skips whole levels of larger and smaller nodes and shortens the
+// reach; a bound that cut too much would miss conflicts near the level borders.
+TEST(SpacingGrid, ConflictsEqualBruteForceOnAGradedField) {
+  const double lo[3] = {-1, -1, -1}, c[3] = {0.2, 0.3, 0.1};
+  const double h0 = 0.01;
+  for (const double g : {0.3, 0.9}) {  // g beta / 2 up to 0.45
+    auto size_at = [&](const double* x) {
+      const double d = std::sqrt((x[0] - c[0]) * (x[0] - c[0]) + (x[1] - c[1]) * (x[1] - c[1]) +
+                                 (x[2] - c[2]) * (x[2] - c[2]));
+      return double(float(h0 + g * d));
+    };
+    std::vector<std::array<double, 4>> stored;
+    auto brute = [&](const double* p, double h, double beta) {
+      for (const auto& n : stored) {
+        const double dx = n[0] - p[0], dy = n[1] - p[1], dz = n[2] - p[2];
+        const double lim = beta * (h + n[3]) / 2;
+        if (dx * dx + dy * dy + dz * dz < lim * lim) return true;
+      }
+      return false;
+    };
+    Rng rng(7);
+    SpacingGrid plain(lo, h0), bounded(lo, h0);
+    bounded.set_lipschitz(g);
+    for (int i = 0; i < 20000; ++i) {
+      std::array<double, 4> n;
+      for (int k = 0; k < 3; ++k) n[k] = rng.uniform(-0.5, 0.5);
+      n[3] = size_at(n.data());
+      if (brute(n.data(), n[3], 0.75)) continue;
+      plain.insert(n.data(), n[3]);
+      bounded.insert(n.data(), n[3]);
+      stored.push_back(n);
+    }
+    int hits = 0, misses = 0;
+    for (const double beta : {0.3, 0.7, 0.75, 1.0}) {
+      for (int i = 0; i < 3000; ++i) {
+        double p[3];
+        for (double& x : p) x = rng.uniform(-0.6, 0.6);
+        const double h = size_at(p);
+        const bool expected = brute(p, h, beta);
+        ASSERT_EQ(plain.conflicts(p, h, beta), expected) << "g " << g << " beta " << beta << " query " << i;
+        ASSERT_EQ(bounded.conflicts(p, h, beta), expected) << "g " << g << " beta " << beta << " query " << i;
+        (expected ? hits : misses) += 1;
+      }
+    }
+    // Both answers are common, so both were compared.
+    EXPECT_GT(hits, 2000) << "g " << g << ", " << misses << " misses, " << stored.size() << " nodes";
+    EXPECT_GT(misses, 2000) << "g " << g << ", " << hits << " hits, " << stored.size() << " nodes";
+  }
+  // The farthest conflict the bound allows: a query at the centre c of the radial field
+  // h = h0 + g |x - c| (h = h0 there) and one node at distance d, whose size h0 + g d is as
+  // large as the Lipschitz bound lets it be. They conflict iff d < beta (2 h0 + g d) / 2, i.e.
+  // d < d* = beta h0 / (1 - g beta / 2). Nodes at d* (1 -+ 1e-6) along the axes from random
+  // centres (so the cell borders fall differently around them).
+  Rng rng(11);
+  for (const double g : {0.3, 0.9})
+    for (const double beta : {0.7, 1.0}) {
+      const double dstar = beta * h0 / (1 - g * beta / 2);
+      for (int i = 0; i < 400; ++i) {
+        // Along an axis, where a cell border can fall between the true and a cut reach.
+        double p[3];
+        for (double& x : p) x = rng.uniform(-0.5, 0.5);
+        for (const double f : {1 - 1e-6, 1 + 1e-6}) {
+          const double d = f * dstar;
+          double q[3] = {p[0], p[1], p[2]};
+          q[i % 3] += i % 2 ? d : -d;
+          SpacingGrid grid(lo, h0);
+          grid.set_lipschitz(g);
+          grid.insert(q, h0 + g * d);
+          EXPECT_EQ(grid.conflicts(p, h0, beta), f < 1) << "g " << g << " beta " << beta << " i " << i;
+        }
+      }
+    }
 }
 
 // Issue 19: the surface sweep split a facet into 4 similar pieces down to the local size, so

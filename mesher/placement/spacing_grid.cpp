@@ -95,12 +95,26 @@ std::uint32_t SpacingGrid::insert(const double* p, double h) {
 }
 
 bool SpacingGrid::conflicts(const double* p, double h, double beta) const {
+  // With a g-Lipschitz field (set_lipschitz), a conflicting q also has h_q <= h + g |p - q|.
+  // Stored and queried sizes may be float roundings of the field (relative error 6e-8), which
+  // the slack eps = 1e-4 covers: h_q (1 - eps) <= h (1 + eps) + g d. With d < beta (h + h_q) / 2
+  // that bounds both h_q and d when k = 1 - eps - g beta / 2 > 0:
+  //   h_q < h (1 + eps + g beta / 2) / k = hq_max,   d < beta (h + hq_max) / 2 = d_max,
+  // so levels whose smallest stored size exceeds hq_max hold no conflict, and no level needs
+  // cells farther than d_max. (Without the Lipschitz bound, hq_max and d_max are infinite.)
+  constexpr double eps = 1e-4;
+  const double k = 1 - eps - lipschitz_ * beta / 2;
+  const bool bounded = lipschitz_ > 0 && k > 0;
+  const double hq_max = bounded ? h * (1 + eps + lipschitz_ * beta / 2) / k : INFINITY;
+  const double d_max = beta * (h + hq_max) / 2;
   for (int level = 0; level < kLevels; ++level) {
     if (!(level_mask_ >> level & 1u)) continue;
     const double s = std::ldexp(s0_, level);
+    // Nodes of level > 0 have h_q >= s (level_of; 1e-6 covers the rounding of h / s0).
+    if (level > 0 && s * (1 - 1e-6) > hq_max) break;  // and so has every level above
     // Nodes of this level have h_q < 2 s (level 0: h_q < 2 s0 or smaller), so a conflict
     // needs |p - q| < beta * (h + 2 s) / 2.
-    const double reach = beta * (h + 2 * s) / 2;
+    const double reach = std::min(beta * (h + 2 * s) / 2, d_max);
     // Lipschitz skip: q at this level has h_q < 2 s (stored values; 1e-4 slack covers the
     // float rounding of sizes stored in a NodeSet), so |p - q| >= (h - h_q) / g > reach.
     if (lipschitz_ > 0 && h - 2.0002 * s > lipschitz_ * reach) continue;
@@ -109,10 +123,12 @@ bool SpacingGrid::conflicts(const double* p, double h, double beta) const {
       lo[a] = std::int64_t(std::floor((p[a] - reach - lo_[a]) / s));
       hi[a] = std::int64_t(std::floor((p[a] + reach - lo_[a]) / s));
     }
+    // (Skipping the cells of this box farther than reach from p saved 30 % of the cell
+    // probes on pinion.ply but cost 15 % more time: the branches mispredict.)
     for (std::int64_t i = lo[0]; i <= hi[0]; ++i)
       for (std::int64_t j = lo[1]; j <= hi[1]; ++j)
-        for (std::int64_t k = lo[2]; k <= hi[2]; ++k) {
-          for (std::uint32_t q = find(key_cells(level, i, j, k)); q != kEmpty; q = next_[q]) {
+        for (std::int64_t kk = lo[2]; kk <= hi[2]; ++kk) {
+          for (std::uint32_t q = find(key_cells(level, i, j, kk)); q != kEmpty; q = next_[q]) {
             const double* x = &xyz_[3 * std::size_t(q)];
             const double dx = x[0] - p[0], dy = x[1] - p[1], dz = x[2] - p[2];
             const double lim = beta * (h + h_[q]) / 2;

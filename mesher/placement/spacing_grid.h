@@ -25,6 +25,8 @@ class SpacingGrid {
   /// gradation). A query can then skip a whole level of small nodes: a node q with h_q < 2 s
   /// is at least (h - h_q) / g from p, beyond reach when h is large. Without it, a query with
   /// h = 3 scans ~18^3 empty cells of the level of h = 0.15 (minutes on a refined block).
+  /// It also bounds h_q and |p - q| of a conflicting node when g beta / 2 < 1, so levels of
+  /// larger nodes are skipped too and no level scans farther than that bound.
   void set_lipschitz(double g) { lipschitz_ = g; }
   /// True if some stored node q conflicts with (p, h) for this beta (see above).
   bool conflicts(const double* p, double h, double beta) const;
