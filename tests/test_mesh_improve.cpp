@@ -13,6 +13,8 @@
 #include <string>
 
 #include "core/rng.h"
+#include "io/surface_io.h"
+#include "mesher/improve/flip_pass.h"
 #include "mesher/improve/improve_boundary.h"
 #include "mesher/improve/improve_flips.h"
 #include "mesher/improve/improve_insert.h"
@@ -940,6 +942,81 @@ TEST(MeshImprove, GradedCubeKeepsEveryInvariantAndRaisesTheWorstAngle) {
     EXPECT_EQ(again.tet_region, vm.tet_region);
     EXPECT_EQ(again.boundary_tet, vm.boundary_tet);
   }
+}
+
+// The flip stage on several threads chooses the next tets' flips at once, in batches, on the
+// mesh as it stands, and makes them in queue order: a choice that read a tet an earlier flip
+// of the batch replaced is made again, a tet a new one would precede goes back to the queue
+// with its choice (reused if still valid). The flips must be exactly those of one thread, on
+// a graded cube whose first flip stage makes thousands (boundary flips included), and every
+// one of those paths must have been taken.
+//
+// On the cubes alone, disabling either mechanism left the result unchanged; on the gear of
+// models/gearbox, graded towards a cross-section as in the gear box, not sending tets back
+// to the queue changes the tets, and keeping stale choices crashes (it flips tets an earlier
+// flip already replaced), as it did on the gear box's housing.
+Piped gear_towards_a_section() {
+  Piped p;
+  p.surface = prepare_surface(read_surface(std::string(KDMESH_SOURCE_DIR) + "/models/gearbox/gear.stl"),
+                              "gear.stl", SurfaceOptions{});
+  p.query = std::make_unique<SurfaceQuery>(p.surface.mesh);
+  SizingOptions so;
+  so.max_size = 4;
+  so.gradation = 0.3;
+  SizingZone z;
+  z.kind = SizingZone::Kind::plane;
+  z.size = 0.8;
+  z.coords = {0, 0, 75, 1, 0, 0};
+  so.zones.push_back(z);
+  p.sizing = build_sizing_field(p.surface.mesh, so);
+  const NodeSet nodes = place_nodes({p.surface, *p.query, p.sizing}, detect_sharp_edges(p.surface.mesh, 30));
+  p.mesh = mesh_volume({p.surface, *p.query, p.sizing}, nodes);
+  return p;
+}
+
+TEST(FlipPass, BatchesOnSeveralThreadsMakeTheOneThreadFlips) {
+  FlipCounts all;
+  for (const auto& [h, at] : std::vector<std::pair<double, double>>{{0.07, 0.5}, {0.06, 0.2}, {0.05, 0.9}, {0, 0}}) {
+    const Piped p = h > 0 ? pipeline({{0, 0, 0, 1, 1, 1}}, h, at) : gear_towards_a_section();
+    const FeatureEdges features = detect_sharp_edges(p.surface.mesh, 30);
+    BoundaryContext boundary;
+    boundary.surface = &p.surface;
+    boundary.query = p.query.get();
+    boundary.sizing = &p.sizing;
+    boundary.features = &features;
+    auto run = [&](unsigned threads, FlipCounts& counts) {
+      VolumeMesh vm = p.mesh;
+      ImproveTets m(vm.nodes, vm.tets, vm.tet_region);
+      m.inside_query = p.query.get();
+      m.certify_inside();
+      SineCache cache(m, threads);
+      const std::size_t ops = flip_pass(m, cache, deg_to_sine(30), 10, counts, &boundary, threads);
+      EXPECT_EQ(ops, counts.edge_removals + counts.face_removals + counts.boundary_flips);
+      m.write_back(vm);
+      return vm;
+    };
+    FlipCounts one;
+    const VolumeMesh ref = run(1, one);
+    EXPECT_GT(one.edge_removals, 1000u) << "h " << h;
+    EXPECT_EQ(one.chosen_again + one.reused + one.requeued, 0u);  // one thread: no batches
+    all.boundary_flips += one.boundary_flips;
+    for (const unsigned threads : {2u, 3u}) {
+      FlipCounts c;
+      const VolumeMesh vm = run(threads, c);
+      EXPECT_EQ(vm.tets, ref.tets) << "h " << h << ", " << threads << " threads";
+      EXPECT_EQ(vm.boundary, ref.boundary) << "h " << h << ", " << threads << " threads";
+      EXPECT_EQ(c.edge_removals, one.edge_removals);
+      EXPECT_EQ(c.face_removals, one.face_removals);
+      EXPECT_EQ(c.boundary_flips, one.boundary_flips);
+      all.chosen_again += c.chosen_again;
+      all.reused += c.reused;
+      all.requeued += c.requeued;
+    }
+  }
+  EXPECT_GT(all.boundary_flips, 0u);
+  EXPECT_GT(all.chosen_again, 0u);
+  EXPECT_GT(all.reused, 0u);
+  EXPECT_GT(all.requeued, 0u);
 }
 
 // Three rounds left handle.ply at diag/20 with 111 tets below the targets (min dihedral 5.1

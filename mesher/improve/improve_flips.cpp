@@ -116,7 +116,7 @@ bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::u
 
 bool boundary_edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::uint32_t b,
                            int max_ring, const BoundaryContext& ctx, FlipCandidate& out,
-                           double floor, const double* sines) {
+                           double floor, const double* sines, std::uint32_t* star_read) {
   static thread_local std::vector<std::uint32_t> ring, star;
   out.old.clear();
   out.fresh.clear();
@@ -131,6 +131,7 @@ bool boundary_edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t 
     return false;  // a feature edge stays
   // The new boundary edge (r_0, r_m) must not be an edge already.
   const std::uint32_t r0 = ring.front(), rm = ring.back();
+  if (star_read) *star_read = r0;
   m.star(r0, star);
   for (std::uint32_t s : star)
     if (index_in(m.v(s), rm) >= 0) return false;

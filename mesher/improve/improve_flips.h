@@ -40,10 +40,12 @@ bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::u
 /// it: (a, b) runs along no feature edge (an end is a surface node, or keeps_feature says
 /// no), (r_0, r_m) is not an edge yet, and both new faces lie on the surface within the
 /// context's tolerance (face_on_surface). Validated (flip_valid); the caller replaces with
-/// boundary_may_change. `floor` and `sines` as for edge_removal.
+/// boundary_may_change. `floor` and `sines` as for edge_removal. If it reads the star of a
+/// vertex other than a and b (the ring end r_0), that vertex goes to *star_read.
 bool boundary_edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::uint32_t b,
                            int max_ring, const BoundaryContext& ctx, FlipCandidate& out,
-                           double floor = -1, const double* sines = nullptr);
+                           double floor = -1, const double* sines = nullptr,
+                           std::uint32_t* star_read = nullptr);
 
 /// Face removal: face i of tet t (opposite p) shared with tet u (opposite q) replaced by the
 /// three tets around the new edge pq (a 2-3 flip). False on a boundary face or if pq does not

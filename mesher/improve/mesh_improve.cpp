@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "core/timer.h"
 #include "mesher/improve/improve_caps.h"
+#include "mesher/improve/flip_pass.h"
 #include "mesher/improve/improve_flips.h"
 #include "mesher/improve/improve_insert.h"
 #include "mesher/improve/improve_split.h"
@@ -20,6 +21,7 @@
 #include "mesher/improve/improve_quality.h"
 #include "mesher/improve/improve_smooth.h"
 #include "mesher/improve/improve_tets.h"
+#include "mesher/improve/sine_cache.h"
 #include "mesher/parallel_for.h"
 #include "mesher/tet_quality.h"
 
@@ -57,105 +59,6 @@ ImproveStage measure(const ImproveTets& m, const std::string& name) {
   }
   s.mean_radius_ratio = s.tets ? sum / double(s.tets) : 0;
   return s;
-}
-
-struct Counters {
-  std::size_t edge_removals = 0, face_removals = 0, boundary_flips = 0;
-};
-
-/// tet_sine of every tet slot (+inf for dead slots), kept up to date by the passes so that a
-/// stage that changes little costs little: flips set the slots they kill and create, vertex
-/// passes the stars of the vertices they moved.
-class SineCache {
- public:
-  SineCache(const ImproveTets& m, unsigned threads) : m_(m), threads_(threads) { refresh_all(); }
-  const std::vector<double>& q() const { return q_; }
-  void refresh_all() {
-    q_.assign(m_.capacity(), std::numeric_limits<double>::infinity());
-    parallel_for(q_.size(), [&](std::size_t b, std::size_t e, unsigned) {
-      for (std::size_t t = b; t < e; ++t)
-        if (m_.alive(std::uint32_t(t))) q_[t] = sine_of(m_, std::uint32_t(t));
-    }, 65536, threads_);
-  }
-  /// Slot t changed (created, killed, or a vertex moved); returns its sine.
-  double refresh(std::uint32_t t) {
-    if (t >= q_.size()) q_.resize(m_.capacity(), std::numeric_limits<double>::infinity());
-    return q_[t] = m_.alive(t) ? sine_of(m_, t) : std::numeric_limits<double>::infinity();
-  }
-  /// The vertices in `moved` changed position.
-  void refresh_stars(const std::vector<std::uint32_t>& moved) {
-    if (moved.size() > m_.capacity() / 64) return refresh_all();
-    std::vector<std::uint32_t> star;
-    for (std::uint32_t v : moved) {
-      m_.star(v, star);
-      for (std::uint32_t t : star) refresh(t);
-    }
-  }
-
- private:
-  const ImproveTets& m_;
-  unsigned threads_;
-  std::vector<double> q_;
-};
-
-/// Flips until no tet below `threshold` has an improving edge or face removal (or, given
-/// `boundary`, boundary edge removal). Tets are taken worst first (ties by id); each takes the
-/// best of its candidates.
-std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring,
-                      Counters& c, const BoundaryContext* boundary = nullptr) {
-  using Entry = std::tuple<double, std::uint32_t, std::uint32_t>;  // quality, tet, version
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
-  for (std::uint32_t t = 0; t < m.capacity(); ++t)
-    if (cache.q()[t] < threshold) heap.emplace(cache.q()[t], t, m.version(t));
-  std::size_t ops = 0;
-  FlipCandidate cand, best;
-  std::vector<std::uint32_t> created;
-  while (!heap.empty()) {
-    const auto [q, t, ver] = heap.top();
-    heap.pop();
-    if (!m.alive(t) || m.version(t) != ver) continue;
-    best.q_new = -1;
-    best.q_old = 0;
-    bool have = false, best_is_edge = false, best_is_boundary = false;
-    const std::uint32_t* v = m.v(t);
-    // Validity (exact orientation, inside tests) is checked last, only for a candidate that
-    // would become the best: the same choice as checking every candidate, for less work.
-    const double* sines = cache.q().data();
-    for (const auto& e : kTetEdge)
-      if (edge_removal(m, t, v[e[0]], v[e[1]], max_ring, cand, have ? best.q_new : -1, sines,
-                       false) &&
-          cand.improves() && (!have || cand.q_new > best.q_new) && flip_valid(m, cand)) {
-        std::swap(best, cand);
-        have = best_is_edge = true;
-      }
-    for (int i = 0; i < 4; ++i)
-      if (face_removal(m, t, i, cand, sines, false) && cand.improves() &&
-          (!have || cand.q_new > best.q_new) && flip_valid(m, cand)) {
-        std::swap(best, cand);
-        have = true;
-        best_is_edge = false;
-      }
-    if (boundary)
-      for (const auto& e : kTetEdge)
-        if (boundary_edge_removal(m, t, v[e[0]], v[e[1]], max_ring, *boundary, cand,
-                                  have ? best.q_new : -1, sines) &&
-            cand.improves() && (!have || cand.q_new > best.q_new)) {
-          std::swap(best, cand);
-          have = best_is_boundary = true;
-          best_is_edge = false;
-        }
-    if (!have) continue;
-    if (!m.replace(best.old, best.fresh, &created, best_is_boundary)) continue;
-    ++ops;
-    ++(best_is_boundary ? c.boundary_flips : best_is_edge ? c.edge_removals : c.face_removals);
-    for (std::uint32_t o : best.old) cache.refresh(o);
-    for (std::uint32_t n : created) {
-      if (!best_is_boundary) m.mark_inside(n);  // flip_valid passed inside_ok on every one
-      const double qn = cache.refresh(n);
-      if (qn < threshold) heap.emplace(qn, n, m.version(n));
-    }
-  }
-  return ops;
 }
 
 /// Calls move(v) for every vertex of `verts` (sorted ids), on up to `threads` threads, with a
@@ -401,7 +304,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain, const ImproveO
   diag = std::sqrt(diag);
   const double threshold = deg_to_sine(options.work_angle);
   const double smooth_threshold = deg_to_sine(options.smooth_angle);
-  Counters c;
+  FlipCounts c;
   SineCache cache(m, options.threads);
   BoundaryContext boundary;
   boundary.surface = &surface;
@@ -445,11 +348,11 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain, const ImproveO
     }
     const std::string n = std::to_string(r + 1);
     st.rounds = r + 1;
-    std::size_t ops = flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
+    std::size_t ops = flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary, options.threads);
     if (cap_threshold > 0) {
       const std::size_t removed = cap_pass(m, cache, cap_threshold, boundary);
       st.caps_removed += removed;
-      if (removed) ops += removed + flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
+      if (removed) ops += removed + flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary, options.threads);
     }
     if (options.split_angle > 0) {
       ops += split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary,
@@ -484,7 +387,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain, const ImproveO
       ops += split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary,
                         options.insert_nodes, /*any_tet=*/true).add_to(st);
     }
-    if (ops) ops += flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary);
+    if (ops) ops += flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary, options.threads);
     stage("final", ops);
   }
   if (options.progress) options.progress("improve", 1.0);

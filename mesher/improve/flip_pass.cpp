@@ -1,0 +1,178 @@
+// kdmesh — the flip stage of the quality-improvement pass (mesher/improve/flip_pass.h).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "mesher/improve/flip_pass.h"
+
+#include <algorithm>
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <queue>
+#include <thread>
+#include <tuple>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "mesher/improve/improve_flips.h"
+#include "mesher/worker_team.h"
+
+namespace kdmesh {
+
+namespace {
+
+/// Tets taken from the queue at once when several threads choose flips.
+constexpr std::size_t kBatch = 64;
+
+/// A tet's choice: its best improving flip on the mesh as it stood, and the vertices beyond
+/// the tet's own whose stars the choice read (boundary edge removals read a ring end's star).
+struct FlipChoice {
+  FlipCandidate best;
+  bool have = false, is_edge = false, is_boundary = false;
+  std::uint32_t star_read[6] = {};
+  int stars = 0;
+};
+
+/// The best of tet t's edge removals, face removals and (given `boundary`) boundary edge
+/// removals that improve the mesh; `cand` is scratch space. Reads only tets that hold a vertex
+/// of t or of out.star_read (positions do not change during the flip stage).
+void choose(const ImproveTets& m, std::uint32_t t, const double* sines, int max_ring,
+            const BoundaryContext* boundary, FlipCandidate& cand, FlipChoice& out) {
+  FlipCandidate& best = out.best;
+  best.q_new = -1;
+  best.q_old = 0;
+  out.have = out.is_edge = out.is_boundary = false;
+  out.stars = 0;
+  const std::uint32_t* v = m.v(t);
+  // Validity (exact orientation, inside tests) is checked last, only for a candidate that
+  // would become the best: the same choice as checking every candidate, for less work.
+  for (const auto& e : kTetEdge)
+    if (edge_removal(m, t, v[e[0]], v[e[1]], max_ring, cand, out.have ? best.q_new : -1, sines,
+                     false) &&
+        cand.improves() && (!out.have || cand.q_new > best.q_new) && flip_valid(m, cand)) {
+      std::swap(best, cand);
+      out.have = out.is_edge = true;
+    }
+  for (int i = 0; i < 4; ++i)
+    if (face_removal(m, t, i, cand, sines, false) && cand.improves() &&
+        (!out.have || cand.q_new > best.q_new) && flip_valid(m, cand)) {
+      std::swap(best, cand);
+      out.have = true;
+      out.is_edge = false;
+    }
+  if (!boundary) return;
+  for (const auto& e : kTetEdge) {
+    std::uint32_t star = kImproveNone;
+    const bool found = boundary_edge_removal(m, t, v[e[0]], v[e[1]], max_ring, *boundary, cand,
+                                             out.have ? best.q_new : -1, sines, &star);
+    if (star != kImproveNone) out.star_read[out.stars++] = star;
+    if (found && cand.improves() && (!out.have || cand.q_new > best.q_new)) {
+      std::swap(best, cand);
+      out.have = out.is_boundary = true;
+      out.is_edge = false;
+    }
+  }
+}
+
+}  // namespace
+
+std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring,
+                      FlipCounts& counts, const BoundaryContext* boundary, unsigned threads) {
+  using Entry = std::tuple<double, std::uint32_t, std::uint32_t>;  // quality, tet, version
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
+  for (std::uint32_t t = 0; t < m.capacity(); ++t)
+    if (cache.q()[t] < threshold) heap.emplace(cache.q()[t], t, m.version(t));
+  const unsigned asked = threads ? threads : std::max(1u, std::thread::hardware_concurrency());
+  // Batches are some 30 us of work per tet: the threads are started once, not per batch.
+  std::unique_ptr<WorkerTeam> team;
+  if (asked > 1) team = std::make_unique<WorkerTeam>(asked);
+  const unsigned workers = team ? team->size() : 1;
+  const std::size_t batch_max = workers > 1 ? kBatch : 1;
+  std::vector<Entry> batch;
+  std::vector<FlipChoice> choices(batch_max);
+  std::vector<std::uint32_t> chosen_at(batch_max), todo;
+  std::vector<FlipCandidate> scratch(workers);
+  // Choices of tets that went back to the queue (a new tet came first), by (tet, version),
+  // with the batch they were made in: reused unless a vertex they read was touched since.
+  std::unordered_map<std::uint64_t, std::pair<FlipChoice, std::uint32_t>> carried;
+  auto key = [](const Entry& e) { return std::uint64_t(std::get<1>(e)) << 32 | std::get<2>(e); };
+  // Per vertex: the last batch in which a tet holding it was replaced (batches count from 1).
+  std::vector<std::uint32_t> touched(m.nodes().size_count(), 0);
+  std::uint32_t stamp = 0;
+  std::size_t ops = 0;
+  std::vector<std::uint32_t> created;
+  while (!heap.empty()) {
+    batch.clear();
+    while (!heap.empty() && batch.size() < batch_max) {
+      const Entry e = heap.top();
+      heap.pop();
+      if (m.alive(std::get<1>(e)) && m.version(std::get<1>(e)) == std::get<2>(e))
+        batch.push_back(e);
+      else if (!carried.empty())
+        carried.erase(key(e));
+    }
+    if (batch.empty()) break;
+    ++stamp;
+    todo.clear();
+    for (std::size_t k = 0; k < batch.size(); ++k) {
+      const auto it = carried.empty() ? carried.end() : carried.find(key(batch[k]));
+      if (it == carried.end()) {
+        todo.push_back(std::uint32_t(k));
+        chosen_at[k] = stamp;
+      } else {
+        std::swap(choices[k], it->second.first);
+        chosen_at[k] = it->second.second;
+        carried.erase(it);
+        ++counts.reused;
+      }
+    }
+    // Choose on the mesh as it stands (read only), the tets shared out one at a time.
+    const double* sines = cache.q().data();
+    if (todo.size() == 1) {
+      choose(m, std::get<1>(batch[todo[0]]), sines, max_ring, boundary, scratch[0], choices[todo[0]]);
+    } else if (!todo.empty()) {
+      std::atomic<std::size_t> next{0};
+      team->run([&](unsigned w) {
+        for (std::size_t i; (i = next.fetch_add(1)) < todo.size();)
+          choose(m, std::get<1>(batch[todo[i]]), sines, max_ring, boundary, scratch[w], choices[todo[i]]);
+      });
+    }
+    // Make them in queue order, as one tet at a time would.
+    for (std::size_t k = 0; k < batch.size(); ++k) {
+      if (k > 0 && !heap.empty() && heap.top() < batch[k]) {  // a new tet comes first
+        counts.requeued += batch.size() - k;
+        for (std::size_t j = k; j < batch.size(); ++j) {
+          heap.push(batch[j]);
+          auto& slot = carried[key(batch[j])];
+          std::swap(slot.first, choices[j]);
+          slot.second = chosen_at[j];
+        }
+        break;
+      }
+      const auto [q, t, ver] = batch[k];
+      if (!m.alive(t) || m.version(t) != ver) continue;
+      FlipChoice& c = choices[k];
+      bool stale = false;
+      for (int i = 0; i < 4; ++i) stale = stale || touched[m.v(t)[i]] >= chosen_at[k];
+      for (int s = 0; s < c.stars; ++s) stale = stale || touched[c.star_read[s]] >= chosen_at[k];
+      if (stale) {
+        choose(m, t, cache.q().data(), max_ring, boundary, scratch[0], c);
+        ++counts.chosen_again;
+      }
+      if (!c.have) continue;
+      for (std::uint32_t o : c.best.old)
+        for (int i = 0; i < 4; ++i) touched[m.v(o)[i]] = stamp;
+      if (!m.replace(c.best.old, c.best.fresh, &created, c.is_boundary)) continue;
+      ++ops;
+      ++(c.is_boundary ? counts.boundary_flips : c.is_edge ? counts.edge_removals : counts.face_removals);
+      for (std::uint32_t o : c.best.old) cache.refresh(o);
+      for (std::uint32_t n : created) {
+        if (!c.is_boundary) m.mark_inside(n);  // flip_valid passed inside_ok on every one
+        const double qn = cache.refresh(n);
+        if (qn < threshold) heap.emplace(qn, n, m.version(n));
+      }
+    }
+  }
+  return ops;
+}
+
+}  // namespace kdmesh

@@ -1,0 +1,50 @@
+// kdmesh — tet_sine of every tet slot of the quality-improvement pass, kept up to date by its
+// stages (part of mesher/improve/mesh_improve.cpp's schedule).
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "mesher/improve/improve_flips.h"
+#include "mesher/improve/improve_tets.h"
+#include "mesher/parallel_for.h"
+
+namespace kdmesh {
+
+/// tet_sine of every tet slot (+inf for dead slots), kept up to date by the passes so that a
+/// stage that changes little costs little: flips set the slots they kill and create, vertex
+/// passes the stars of the vertices they moved.
+class SineCache {
+ public:
+  SineCache(const ImproveTets& m, unsigned threads) : m_(m), threads_(threads) { refresh_all(); }
+  const std::vector<double>& q() const { return q_; }
+  void refresh_all() {
+    q_.assign(m_.capacity(), std::numeric_limits<double>::infinity());
+    parallel_for(q_.size(), [&](std::size_t b, std::size_t e, unsigned) {
+      for (std::size_t t = b; t < e; ++t)
+        if (m_.alive(std::uint32_t(t))) q_[t] = sine_of(m_, std::uint32_t(t));
+    }, 65536, threads_);
+  }
+  /// Slot t changed (created, killed, or a vertex moved); returns its sine.
+  double refresh(std::uint32_t t) {
+    if (t >= q_.size()) q_.resize(m_.capacity(), std::numeric_limits<double>::infinity());
+    return q_[t] = m_.alive(t) ? sine_of(m_, t) : std::numeric_limits<double>::infinity();
+  }
+  /// The vertices in `moved` changed position.
+  void refresh_stars(const std::vector<std::uint32_t>& moved) {
+    if (moved.size() > m_.capacity() / 64) return refresh_all();
+    std::vector<std::uint32_t> star;
+    for (std::uint32_t v : moved) {
+      m_.star(v, star);
+      for (std::uint32_t t : star) refresh(t);
+    }
+  }
+
+ private:
+  const ImproveTets& m_;
+  unsigned threads_;
+  std::vector<double> q_;
+};
+
+}  // namespace kdmesh
