@@ -647,6 +647,57 @@ TEST(NodePlacement, DeterministicForASeedAndDifferentAcrossSeeds) {
   EXPECT_FALSE(same(a, c));
 }
 
+// The boundary layer decides its tries in batches of 65,536: their conflict tests against
+// the grid as it stood before the batch, their distance and side run on several threads, and
+// each kept try is then tested against the nodes its batch kept before it. This must give
+// exactly the nodes of deciding each try when it is drawn: the same on 1, 2 and 3 threads,
+// and no layer node closer to an earlier node than the interior rule allows (brute force
+// over all pairs; the batch test left out put nodes 0.0007 apart).
+TEST(InteriorFill, BoundaryLayerInBatchesIsTheSameOnAnyThreadCountAndKeepsItsSpacing) {
+  const Model m = cylinder(0.5, 1, 48);
+  const SurfaceQuery q(m.surface.mesh);
+  const SizingField field = point_zone_field(m.surface.mesh, 0.03, 0.012, {0.5, 0, 0.5});
+  const double glo[3] = {-2, -2, -2};
+  SpacingGrid grid(glo, field.min_size());
+  grid.set_lipschitz(field.options().gradation);
+  NodeSet surface_nodes;
+  place_edge_nodes(m.surface.mesh, m.features, field, 0.3, grid, surface_nodes);
+  SurfaceSamplingOptions so;
+  so.beta = 0.7;
+  place_surface_nodes(m.surface.mesh, field, so, grid, surface_nodes);
+  InteriorFillOptions o;
+  o.beta = 0.75;
+  const std::size_t tries = surface_nodes.size_count() * std::size_t(o.layer_tries);
+  ASSERT_GT(tries, 3u * 65536u);  // several batches
+  std::vector<NodeSet> runs;
+  InteriorFillStats st;
+  for (const unsigned threads : {1u, 2u, 3u}) {
+    o.threads = threads;
+    SpacingGrid g = grid;
+    NodeSet ns = surface_nodes;
+    const InteriorFillStats s = fill_interior(m.surface.mesh, m.surface.bbox_min, m.surface.bbox_max, q,
+                                              field, o, g, ns);
+    if (!runs.empty()) {
+      EXPECT_TRUE(same(runs.front(), ns)) << threads << " threads";
+      EXPECT_EQ(s.distance_queries, st.distance_queries) << threads << " threads";
+      EXPECT_EQ(s.side_queries, st.side_queries) << threads << " threads";
+    }
+    st = s;
+    runs.push_back(std::move(ns));
+  }
+  const NodeSet& ns = runs.front();
+  ASSERT_GT(st.layer_nodes, 1000u);
+  const std::size_t first_layer = ns.size_count() - st.layer_nodes;
+  std::vector<double> h(ns.size_count());
+  for (std::size_t i = 0; i < h.size(); ++i) h[i] = field(ns.points.p(std::uint32_t(i)));
+  double worst = INFINITY;  // least |p - q| / ((h_p + h_q) / 2) of a layer node p and an earlier q
+  for (std::size_t i = first_layer; i < ns.size_count(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      worst = std::min(worst, dist(ns.points.p(std::uint32_t(i)), ns.points.p(std::uint32_t(j))) /
+                                  ((h[i] + h[j]) / 2));
+  EXPECT_GE(worst, 0.75 * (1 - 1e-9));
+}
+
 // ---- thin plate: no room inside ----
 
 TEST(NodePlacement, PlateThinnerThanTheClearanceHasSurfaceNodesOnly) {

@@ -214,6 +214,114 @@ struct Filler {
   }
 };
 
+
+/// One surface node's frame for its boundary-layer tries: position, outward unit normal of its
+/// facet, two unit tangents, size, and how many sides it proposes points on.
+struct LayerFrame {
+  double s[3], n[3], e1[3], e2[3];
+  double hs;
+  int sides;
+};
+
+/// One boundary-layer try: its node's frame, its number k (k >= layer_tries: the other side),
+/// its three uniform draws, then what the parallel phase found.
+struct LayerTry {
+  std::uint32_t frame;
+  int k;
+  double u[3];
+  double p[3], h, d;
+  bool clash;  // conflicts with a node in the grid as it stood before the batch
+  int side;
+};
+
+/// Boundary layer (InteriorFillOptions::layer_tries): the tries of the surface nodes in id
+/// order, each kept if it conflicts with no node, lies at least clearance * h from the surface
+/// and inside. One RNG stream, drawn in that order: deterministic. The tries go in batches:
+/// the draws are made in order, then every try of the batch gets its size, its conflict test
+/// against the grid as it stood before the batch, its distance and side on `threads` threads,
+/// then the tries are decided in order, testing each one only against the nodes the batch
+/// has accepted before it (a conflict with a set is a conflict with one of its parts). The
+/// nodes, the grid and the stats come out as if each try had been decided when it was drawn.
+void add_boundary_layer(const SurfaceMesh& surface, const SurfaceQuery& query,
+                        const SizingField& sizing, const InteriorFillOptions& options,
+                        std::size_t surface_nodes, SpacingGrid& grid, NodeSet& nodes,
+                        InteriorFillStats& st) {
+  if (options.layer_tries <= 0) return;
+  Rng rng(options.seed ^ 0x6c8e9cf570932bd5ULL);
+  constexpr std::size_t kBatchTries = std::size_t(1) << 16;
+  const unsigned nthreads = std::max(1u, options.threads);
+  std::vector<LayerFrame> frames;
+  std::vector<LayerTry> tries;
+  std::size_t i = 0;
+  while (i < surface_nodes) {
+    frames.clear();
+    tries.clear();
+    for (; i < surface_nodes && tries.size() < kBatchTries; ++i) {
+      if (nodes.kind[i] == NodeKind::interior || nodes.facet[i] >= surface.num_tris()) continue;
+      const std::uint32_t* t = surface.tri(nodes.facet[i]);
+      const double* a = surface.points.p(t[0]);
+      const double* b = surface.points.p(t[1]);
+      const double* c = surface.points.p(t[2]);
+      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+      const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      LayerFrame f;
+      double* n = f.n;
+      n[0] = u[1] * v[2] - u[2] * v[1], n[1] = u[2] * v[0] - u[0] * v[2], n[2] = u[0] * v[1] - u[1] * v[0];
+      const double nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      if (!(nl > 0)) continue;
+      for (int ax = 0; ax < 3; ++ax) n[ax] /= nl;  // outward unit normal
+      const double ul = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+      for (int ax = 0; ax < 3; ++ax) f.e1[ax] = u[ax] / ul;
+      f.e2[0] = n[1] * f.e1[2] - n[2] * f.e1[1];
+      f.e2[1] = n[2] * f.e1[0] - n[0] * f.e1[2];
+      f.e2[2] = n[0] * f.e1[1] - n[1] * f.e1[0];
+      for (int ax = 0; ax < 3; ++ax) f.s[ax] = nodes.points.p(std::uint32_t(i))[ax];
+      f.hs = nodes.size[i];
+      f.sides = nodes.facet[i] >= options.two_sided_from ? 2 : 1;
+      frames.push_back(f);
+      for (int k = 0; k < f.sides * options.layer_tries; ++k) {
+        LayerTry& tr = tries.emplace_back();
+        tr.frame = std::uint32_t(frames.size() - 1);
+        tr.k = k;
+        for (double& x : tr.u) x = rng.uniform();  // depth, angle, radius: in this order
+      }
+    }
+    parallel_for(tries.size(), [&](std::size_t b, std::size_t e, unsigned) {
+      for (std::size_t j = b; j < e; ++j) {
+        LayerTry& tr = tries[j];
+        const LayerFrame& f = frames[tr.frame];
+        double n[3] = {f.n[0], f.n[1], f.n[2]};
+        if (tr.k >= options.layer_tries)
+          for (double& x : n) x = -x;  // the other side of an interface
+        const double depth = f.hs * (options.clearance + options.layer_depth * tr.u[0]);
+        const double ang = 0.0 + (6.283185307179586 - 0.0) * tr.u[1];
+        const double rad = f.hs * 0.6 * std::sqrt(tr.u[2]);
+        const double dx = rad * std::cos(ang), dy = rad * std::sin(ang);
+        for (int ax = 0; ax < 3; ++ax)
+          tr.p[ax] = f.s[ax] - depth * n[ax] + dx * f.e1[ax] + dy * f.e2[ax];
+        tr.h = sizing(tr.p);
+        tr.clash = grid.conflicts(tr.p, tr.h, options.beta);
+        tr.d = tr.clash ? 0 : query.distance(tr.p);
+        tr.side = !tr.clash && tr.d >= options.clearance * tr.h && tr.d > 0 ? query.side(tr.p) : 0;
+      }
+    }, 1024, nthreads);
+    SpacingGrid batch(grid.lo(), grid.s0());
+    batch.set_lipschitz(sizing.options().gradation);
+    std::vector<const LayerTry*> accepted;
+    for (const LayerTry& tr : tries) {
+      if (tr.clash || batch.conflicts(tr.p, tr.h, options.beta)) continue;
+      ++st.distance_queries;
+      if (!(tr.d >= options.clearance * tr.h) || !(tr.d > 0)) continue;
+      ++st.side_queries;
+      if (tr.side <= 0) continue;
+      batch.insert(tr.p, tr.h);
+      nodes.push_back(tr.p, NodeKind::interior, kNoFacet, float(tr.h));
+      accepted.push_back(&tr);
+    }
+    st.layer_nodes += accepted.size();
+    for (const LayerTry* tr : accepted) grid.insert(tr->p, tr->h);
+  }
+}
 }  // namespace
 
 InteriorFillStats fill_interior(const SurfaceMesh& surface, const double* lo, const double* hi,
@@ -330,49 +438,7 @@ InteriorFillStats fill_interior(const SurfaceMesh& surface, const double* lo, co
   st.lattice_nodes = accepted.size();
   if (progress) progress(0.9);
 
-  // Boundary layer, one RNG stream, surface nodes in id order: deterministic.
-  Rng rng(options.seed ^ 0x6c8e9cf570932bd5ULL);
-  for (std::size_t i = 0; i < surface_nodes && options.layer_tries > 0; ++i) {
-    if (nodes.kind[i] == NodeKind::interior || nodes.facet[i] >= surface.num_tris()) continue;
-    const std::uint32_t* t = surface.tri(nodes.facet[i]);
-    const double* a = surface.points.p(t[0]);
-    const double* b = surface.points.p(t[1]);
-    const double* c = surface.points.p(t[2]);
-    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-    const double nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (!(nl > 0)) continue;
-    for (double& x : n) x /= nl;  // outward unit normal
-    const double ul = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-    const double e1[3] = {u[0] / ul, u[1] / ul, u[2] / ul};
-    const double e2[3] = {n[1] * e1[2] - n[2] * e1[1], n[2] * e1[0] - n[0] * e1[2],
-                          n[0] * e1[1] - n[1] * e1[0]};
-    const double s[3] = {nodes.points.p(std::uint32_t(i))[0], nodes.points.p(std::uint32_t(i))[1],
-                         nodes.points.p(std::uint32_t(i))[2]};  // a copy: push_back reallocates
-    const double hs = nodes.size[i];
-    const int sides = nodes.facet[i] >= options.two_sided_from ? 2 : 1;
-    for (int k = 0; k < sides * options.layer_tries; ++k) {
-      if (k == options.layer_tries)
-        for (double& x : n) x = -x;  // the other side of an interface
-      const double depth = hs * (options.clearance + options.layer_depth * rng.uniform());
-      const double ang = rng.uniform(0, 6.283185307179586);
-      const double rad = hs * 0.6 * std::sqrt(rng.uniform());
-      const double dx = rad * std::cos(ang), dy = rad * std::sin(ang);
-      double p[3];
-      for (int ax = 0; ax < 3; ++ax) p[ax] = s[ax] - depth * n[ax] + dx * e1[ax] + dy * e2[ax];
-      const double h = sizing(p);
-      if (grid.conflicts(p, h, options.beta)) continue;
-      const double d = query.distance(p);
-      ++st.distance_queries;
-      if (!(d >= options.clearance * h) || !(d > 0)) continue;
-      ++st.side_queries;
-      if (query.side(p) <= 0) continue;
-      grid.insert(p, h);
-      nodes.push_back(p, NodeKind::interior, kNoFacet, float(h));
-      ++st.layer_nodes;
-    }
-  }
+  add_boundary_layer(surface, query, sizing, options, surface_nodes, grid, nodes, st);
   if (progress) progress(1.0);
   return st;
 }
