@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "mesher/delaunay/canonical_order.h"
 #include "mesher/delaunay/delaunay.h"
 #include "mesher/reference/delaunay_check.h"
 #include "mesher/order/order.h"
@@ -136,6 +137,64 @@ TEST(ParallelDelaunay, HintsToPointsLaterInTheOrderAreHonoured) {
 
 TEST(ParallelDelaunay, AbsurdThreadCountIsAUsageError) {
   EXPECT_THROW(run(generate_points(Distribution::cube, 1000, 1), 100000), UsageError);
+}
+
+}  // namespace
+}  // namespace kdmesh
+
+namespace kdmesh {
+namespace {
+
+// The pipeline meshes from canonical records (mesher/delaunay/canonical_order.h), so that its
+// tie-breaks by tet id, and so the mesh, do not depend on the thread count. On 1, 2 and 3
+// threads, for random points, the axes, an integer lattice (ties everywhere) and points with
+// exact repeats (which copy a run keeps depends on who inserts it): the same records, the
+// same duplicate lists, still a valid Delaunay triangulation with the same tets; and the
+// same again from a triangulation built inserting another order.
+TEST(CanonicalOrder, RecordsAreTheSameOnAnyThreadCountAndStillValid) {
+  std::vector<std::pair<std::string, PointSet>> cases;
+  cases.emplace_back("cube", generate_points(Distribution::cube, kN, 11));
+  cases.emplace_back("axes", generate_points(Distribution::axes, kN, 12));
+  PointSet lattice;
+  for (int i = 0; i < 36; ++i)
+    for (int j = 0; j < 36; ++j)
+      for (int k = 0; k < 36; ++k) lattice.push_back(i, j, k);
+  cases.emplace_back("lattice 36^3", lattice);
+  PointSet repeats = generate_points(Distribution::cube, kN, 13);
+  for (std::uint32_t i = 0; i < 3000; ++i) {
+    const std::uint32_t src = (i * 7919u) % std::uint32_t(kN);
+    repeats.push_back(repeats.p(src)[0], repeats.p(src)[1], repeats.p(src)[2]);
+  }
+  cases.emplace_back("cube with 3000 repeats", repeats);
+  for (const auto& [what, pts] : cases) {
+    const Ordering order = make_order(pts, {OrderKind::kd_bfs_hilbert, 1, 0.125});
+    DelaunayResult first;
+    for (const unsigned threads : {1u, 2u, 3u}) {
+      DelaunayOptions o;
+      o.threads = threads;
+      DelaunayResult r = delaunay(pts, order, o);
+      const std::vector<std::uint32_t> before = canonical_tets(pts, r.tri);
+      canonicalize_triangulation(r.tri, order, r.stats, threads);
+      const std::string run = what + ", " + std::to_string(threads) + " threads";
+      expect_valid(pts, r, run);
+      EXPECT_TRUE(compare_tets(pts, before, canonical_tets(pts, r.tri)).same_set()) << run;
+      if (threads == 1) {
+        first = std::move(r);
+        continue;
+      }
+      EXPECT_GE(r.stats.parallel_rounds, 1u) << run;
+      EXPECT_TRUE(r.tri.data == first.tri.data) << run;
+      EXPECT_EQ(r.stats.duplicates, first.stats.duplicates) << run;
+      EXPECT_EQ(r.stats.duplicate_of, first.stats.duplicate_of) << run;
+    }
+    // The form depends on the tets and the order given only: built inserting another order
+    // (which keeps other copies of the repeats), then put in the form of this one.
+    DelaunayResult other = delaunay(pts, make_order(pts, {OrderKind::random, 3, 0.125}));
+    canonicalize_triangulation(other.tri, order, other.stats);
+    EXPECT_TRUE(other.tri.data == first.tri.data) << what << ", built in random order";
+    EXPECT_EQ(other.stats.duplicates, first.stats.duplicates) << what << ", built in random order";
+    EXPECT_EQ(other.stats.duplicate_of, first.stats.duplicate_of) << what << ", built in random order";
+  }
 }
 
 }  // namespace

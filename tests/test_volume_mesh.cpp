@@ -12,6 +12,8 @@
 
 #include "core/error.h"
 #include "core/rng.h"
+#include "io/surface_io.h"
+#include "mesher/surface/surface_prepare.h"
 #include "mesher/volume/boundary_faces.h"
 #include "mesher/improve/mesh_improve.h"
 #include "mesher/quality/mesh_check.h"
@@ -600,6 +602,35 @@ TEST(VolumeMesh, PipelineOnIcosphere) {
   const MeshCheck c = check_volume_mesh(vm, {s, q, h});
   EXPECT_TRUE(c.ok()) << failures(c);
   EXPECT_LT(c.volume_error, 1e-9);
+}
+
+// The volume mesh does not depend on the Delaunay's thread count: the parallel kernel stores
+// the same tets in another order, and the triangulation is put in canonical order before the
+// classification, the recovery and the quality pass break their ties by tet id. The gear of
+// models/gearbox at size 1.9 (above the ~40k nodes from which the kernel uses its threads).
+TEST(VolumeMesh, TheSameMeshOnOneTwoAndThreeDelaunayThreads) {
+  const PreparedSurface s = prepare_surface(
+      read_surface(std::string(KDMESH_SOURCE_DIR) + "/models/gearbox/gear.stl"), "gear.stl", SurfaceOptions{});
+  const SurfaceQuery q(s.mesh);
+  const SizingField h = uniform_size(s, 1.9);
+  const NodeSet nodes = place_nodes({s, q, h}, detect_sharp_edges(s.mesh, 30));
+  ASSERT_GT(nodes.size_count(), 45000u);
+  VolumeMesh first;
+  for (const unsigned threads : {1u, 2u, 3u}) {
+    VolumeMeshOptions o;
+    o.threads = threads;
+    VolumeMesh vm = mesh_volume({s, q, h}, nodes, o);
+    if (threads == 1) {
+      EXPECT_EQ(vm.stats.delaunay.parallel_rounds, 0u);
+      first = std::move(vm);
+      continue;
+    }
+    EXPECT_GE(vm.stats.delaunay.parallel_rounds, 1u) << threads << " threads";
+    EXPECT_TRUE(vm.tets == first.tets) << threads << " threads";
+    EXPECT_TRUE(vm.boundary == first.boundary) << threads << " threads";
+    EXPECT_TRUE(vm.tet_region == first.tet_region) << threads << " threads";
+    EXPECT_TRUE(vm.nodes.points.xyz == first.nodes.points.xyz) << threads << " threads";
+  }
 }
 
 // The check certifies a boundary vertex or face without a tree query when its corners lie on

@@ -20,6 +20,7 @@
 
 #include "core/error.h"
 #include "core/timer.h"
+#include "mesher/delaunay/canonical_order.h"
 #include "mesher/volume/boundary_faces.h"
 #include "mesher/volume/interface_faces.h"
 #include "mesher/surface/crease_points.h"
@@ -44,7 +45,10 @@ DelaunayResult triangulate(const NodeSet& nodes, const VolumeMeshOptions& option
   sw.reset();
   DelaunayOptions dopt;
   if (options.progress) dopt.progress = [&](double f) { options.progress("delaunay", f); };
+  dopt.threads = options.threads;
   DelaunayResult r = delaunay(nodes.points, order, dopt);
+  // The records in canonical order: the mesh then does not depend on the thread count.
+  canonicalize_triangulation(r.tri, order, r.stats, options.threads);
   stats.delaunay_seconds += sw.seconds();
   return r;
 }
