@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "mesher/bucket_scatter.h"
 #include "mesher/parallel_for.h"
 
 namespace kdmesh {
@@ -103,14 +104,10 @@ void canonicalize_triangulation(Triangulation& tri, const Ordering& order, Delau
 
   // Counting sort by the last vertex (ranks 0..n, n = infinite), stable, then each bucket by
   // the other three ranks, largest first (distinct tets differ in some rank).
-  std::vector<std::uint32_t> start(n + 2, 0);
-  for (std::size_t t = 0; t < nt; ++t) ++start[slot[t] + 1];
-  for (std::size_t r = 0; r <= n; ++r) start[r + 1] += start[r];
   std::vector<std::uint32_t> sorted(nt);
-  {
-    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t t = 0; t < nt; ++t) sorted[fill[slot[t]]++] = std::uint32_t(t);
-  }
+  const std::vector<std::size_t> start = bucket_scatter(
+      nt, n + 1, [&](std::size_t t) { return slot[t]; },
+      [&](std::size_t t, std::size_t at) { sorted[at] = std::uint32_t(t); });
   parallel_for(n + 1, [&](std::size_t b, std::size_t e, unsigned) {
     std::vector<std::pair<std::array<std::uint32_t, 3>, std::uint32_t>> bucket;
     for (std::size_t r = b; r < e; ++r) {

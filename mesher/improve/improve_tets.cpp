@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "mesher/bucket_scatter.h"
 #include "mesher/parallel_for.h"
 #include "mesher/volume/volume_mesh.h"
 
@@ -42,19 +43,21 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
   // around a vertex then lie close together in memory when nearby nodes have nearby ids,
   // which the passes' star walks (and the input order, in insertion order) need.
   {
-    std::vector<std::uint32_t> count(np + 1, 0), order(nt);
-    auto min_of = [&](std::size_t t) {
-      return std::min(std::min(tets[4 * t], tets[4 * t + 1]), std::min(tets[4 * t + 2], tets[4 * t + 3]));
-    };
-    for (std::size_t t = 0; t < nt; ++t) ++count[min_of(t) + 1];
-    for (std::size_t k = 0; k < np; ++k) count[k + 1] += count[k];
-    for (std::size_t t = 0; t < nt; ++t) order[count[min_of(t)]++] = std::uint32_t(t);
+    std::vector<std::uint32_t> order(nt);
+    bucket_scatter(
+        nt, np,
+        [&](std::size_t t) {
+          return std::min(std::min(tets[4 * t], tets[4 * t + 1]), std::min(tets[4 * t + 2], tets[4 * t + 3]));
+        },
+        [&](std::size_t t, std::size_t at) { order[at] = std::uint32_t(t); });
     tv_.resize(4 * nt);
     region_.assign(nt, 0);
-    for (std::size_t s = 0; s < nt; ++s) {
-      std::copy_n(&tets[4 * std::size_t(order[s])], 4, &tv_[4 * s]);
-      if (order[s] < region.size()) region_[s] = region[order[s]];
-    }
+    parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
+      for (std::size_t s = b; s < e; ++s) {
+        std::copy_n(&tets[4 * std::size_t(order[s])], 4, &tv_[4 * s]);
+        if (order[s] < region.size()) region_[s] = region[order[s]];
+      }
+    }, 1 << 16);
   }
   ta_.assign(4 * nt, kImproveNone);
   version_.assign(nt, 0);
@@ -68,17 +71,13 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
   struct Rec {
     std::uint32_t b, c, ref;
   };
-  std::vector<std::uint32_t> start(np + 1, 0);
-  for (std::size_t t = 0; t < nt; ++t)
-    for (int i = 0; i < 4; ++i) ++start[face_key(&tv_[4 * t], i)[0] + 1];
-  for (std::size_t k = 0; k < np; ++k) start[k + 1] += start[k];
-  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
   std::vector<Rec> faces(4 * nt);
-  for (std::size_t t = 0; t < nt; ++t)
-    for (int i = 0; i < 4; ++i) {
-      const Key k = face_key(&tv_[4 * t], i);
-      faces[fill[k[0]]++] = {k[1], k[2], std::uint32_t(4 * t + i)};
-    }
+  const std::vector<std::size_t> start = bucket_scatter(
+      4 * nt, np, [&](std::size_t f) { return face_key(&tv_[4 * (f / 4)], int(f % 4))[0]; },
+      [&](std::size_t f, std::size_t at) {
+        const Key k = face_key(&tv_[4 * (f / 4)], int(f % 4));
+        faces[at] = {k[1], k[2], std::uint32_t(f)};
+      });
   std::vector<std::uint8_t> overfull(np, 0);
   parallel_for(np, [&](std::size_t kb, std::size_t ke, unsigned) {
   for (std::size_t k = kb; k < ke; ++k) {

@@ -117,7 +117,7 @@ std::vector<std::uint32_t> colour_pass(ImproveTets& m, const std::vector<std::ui
   for (const std::vector<std::uint32_t>& group : by_colour)
     parallel_for(group.size(), [&](std::size_t b, std::size_t e, unsigned) {
       for (std::size_t k = b; k < e; ++k) moved[slot[group[k]]] = move(group[k]);
-    }, 256, threads);
+    }, 16, threads);
   std::vector<std::uint32_t> out;
   for (std::size_t k = 0; k < n; ++k)
     if (moved[k]) out.push_back(verts[k]);

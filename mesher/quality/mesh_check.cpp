@@ -10,11 +10,11 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
-#include <thread>
 
 #include "core/face_samples.h"
 #include "core/timer.h"
 #include "core/triangle_distance.h"
+#include "mesher/bucket_scatter.h"
 #include "mesher/parallel_for.h"
 #include "mesher/quality/centroid_sides.h"
 #include "mesher/delaunay/predicates.h"
@@ -44,53 +44,27 @@ bool same_cycle(const std::array<std::uint32_t, 3>& a, const std::array<std::uin
 }
 
 /// The 4 faces of every tet, outward, sorted by (vertex set, tet): a counting sort on the
-/// smallest vertex (each part of the tets counted and scattered on its own thread), then each
-/// bucket sorted on its own (in parallel), into one array.
+/// smallest vertex (bucket_scatter), then each bucket sorted on its own (in parallel).
 std::vector<Face> sorted_faces(const std::vector<std::uint32_t>& tets, std::size_t np) {
   static constexpr int kF[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   const std::size_t nt = tets.size() / 4;
-  auto make = [&](std::size_t t, int i) {
+  auto make = [&](std::size_t k) {  // face k % 4 of tet k / 4
     Face f;
-    for (int j = 0; j < 3; ++j) f.out[j] = tets[4 * t + kF[i][j]];
+    for (int j = 0; j < 3; ++j) f.out[j] = tets[4 * (k / 4) + kF[k % 4][j]];
     f.key = f.out;
     std::sort(f.key.begin(), f.key.end());
-    f.tet = std::uint32_t(t);
+    f.tet = std::uint32_t(k / 4);
     return f;
   };
-  const std::size_t parts = std::clamp<std::size_t>(nt / (1 << 16), 1, std::max(1u, std::thread::hardware_concurrency()));
-  auto part_begin = [&](std::size_t p) { return nt * p / parts; };
-  // at[p * np + v]: faces of part p with smallest vertex v, then where they go (4 nt < 2^32:
-  // ids_valid below refuses larger meshes).
-  std::vector<std::uint32_t> at(parts * np, 0);
-  parallel_for(parts, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t p = b; p < e; ++p) {
-      std::uint32_t* count = &at[p * np];
-      for (std::size_t t = part_begin(p); t < part_begin(p + 1); ++t)
-        for (int i = 0; i < 4; ++i)
-          ++count[std::min({tets[4 * t + kF[i][0]], tets[4 * t + kF[i][1]], tets[4 * t + kF[i][2]]})];
-    }
-  }, 1);
-  std::vector<std::size_t> start(np + 1, 0);
-  for (std::size_t v = 0; v < np; ++v) {
-    std::size_t next = start[v];
-    for (std::size_t p = 0; p < parts; ++p) {
-      const std::uint32_t c = at[p * np + v];
-      at[p * np + v] = std::uint32_t(next);
-      next += c;
-    }
-    start[v + 1] = next;
-  }
   std::vector<Face> faces(4 * nt);
-  parallel_for(parts, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t p = b; p < e; ++p) {
-      std::uint32_t* to = &at[p * np];
-      for (std::size_t t = part_begin(p); t < part_begin(p + 1); ++t)
-        for (int i = 0; i < 4; ++i) {
-          const Face f = make(t, i);
-          faces[to[f.key[0]]++] = f;
-        }
-    }
-  }, 1);
+  const std::vector<std::size_t> start = bucket_scatter(
+      4 * nt, np,
+      [&](std::size_t k) {
+        const std::uint32_t* v = &tets[4 * (k / 4)];
+        const int* f = kF[k % 4];
+        return std::min({v[f[0]], v[f[1]], v[f[2]]});
+      },
+      [&](std::size_t k, std::size_t at) { faces[at] = make(k); });
   parallel_for(np, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t v = b; v < e; ++v)
       std::sort(faces.begin() + std::ptrdiff_t(start[v]), faces.begin() + std::ptrdiff_t(start[v + 1]),
@@ -140,7 +114,7 @@ bool ids_valid(const VolumeMesh& mesh, MeshCheck& c) {
     c.failures.push_back("tet array length " + std::to_string(mesh.tets.size()) + " is not a multiple of 4");
     return false;
   }
-  if (mesh.tets.size() >= (std::size_t(1) << 32)) {
+  if (mesh.tets.size() >= (std::size_t(1) << 32)) {  // bucket_scatter's limit on the faces
     c.failures.push_back("the mesh has " + std::to_string(mesh.tets.size() / 4) +
                          " tets; the check takes fewer than 2^30");
     return false;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "mesher/bucket_scatter.h"
 #include "mesher/parallel_for.h"
 
 namespace kdmesh {
@@ -23,19 +24,15 @@ SizeFidelity measure_size_fidelity(const PointSet& points, const std::vector<std
                        std::to_string(tets[k]) + " of " + std::to_string(np));
   // The unique edges (a < b), grouped by a: a counting sort on a, then each group sorted.
   // The order is (a, b) ascending, as a sort of all the edges would give.
-  std::vector<std::uint32_t> start(np + 1, 0), other(6 * nt);
-  auto each_edge = [&](auto&& f) {
-    for (std::size_t t = 0; t < nt; ++t)
-      for (int i = 0; i < 4; ++i)
-        for (int j = i + 1; j < 4; ++j)
-          f(std::min(tets[4 * t + i], tets[4 * t + j]), std::max(tets[4 * t + i], tets[4 * t + j]));
+  static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  auto ends = [&](std::size_t k) {  // edge k % 6 of tet k / 6, as (a, b), a < b
+    const std::uint32_t p = tets[4 * (k / 6) + kEdge[k % 6][0]], q = tets[4 * (k / 6) + kEdge[k % 6][1]];
+    return std::pair{std::min(p, q), std::max(p, q)};
   };
-  each_edge([&](std::uint32_t a, std::uint32_t) { ++start[a + 1]; });
-  for (std::size_t v = 0; v < np; ++v) start[v + 1] += start[v];
-  {
-    std::vector<std::uint32_t> at(start.begin(), start.end() - 1);
-    each_edge([&](std::uint32_t a, std::uint32_t b) { other[at[a]++] = b; });
-  }
+  std::vector<std::uint32_t> other(6 * nt);
+  const std::vector<std::size_t> start = bucket_scatter(
+      6 * nt, np, [&](std::size_t k) { return ends(k).first; },
+      [&](std::size_t k, std::size_t at) { other[at] = ends(k).second; });
   std::vector<std::uint32_t> unique_count(np);
   parallel_for(np, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t v = b; v < e; ++v) {
