@@ -214,7 +214,6 @@ struct Filler {
   }
 };
 
-
 /// One surface node's frame for its boundary-layer tries: position, outward unit normal of its
 /// facet, two unit tangents, size, and how many sides it proposes points on.
 struct LayerFrame {
@@ -224,11 +223,11 @@ struct LayerFrame {
 };
 
 /// One boundary-layer try: its node's frame, its number k (k >= layer_tries: the other side),
-/// its three uniform draws, then what the parallel phase found.
+/// its three draws (depth fraction, angle, radius fraction), then what the parallel phase found.
 struct LayerTry {
   std::uint32_t frame;
   int k;
-  double u[3];
+  double depth_u, angle, radius_u;
   double p[3], h;
   bool clash;  // conflicts with a node in the grid as it stood before the batch
 };
@@ -283,7 +282,9 @@ void add_boundary_layer(const SurfaceMesh& surface, const SurfaceQuery& query,
         LayerTry& tr = tries.emplace_back();
         tr.frame = std::uint32_t(frames.size() - 1);
         tr.k = k;
-        for (double& x : tr.u) x = rng.uniform();  // depth, angle, radius: in this order
+        tr.depth_u = rng.uniform();  // the three draws, in this order
+        tr.angle = rng.uniform(0, 6.283185307179586);
+        tr.radius_u = rng.uniform();
       }
     }
     parallel_for(tries.size(), [&](std::size_t b, std::size_t e, unsigned) {
@@ -293,10 +294,9 @@ void add_boundary_layer(const SurfaceMesh& surface, const SurfaceQuery& query,
         double n[3] = {f.n[0], f.n[1], f.n[2]};
         if (tr.k >= options.layer_tries)
           for (double& x : n) x = -x;  // the other side of an interface
-        const double depth = f.hs * (options.clearance + options.layer_depth * tr.u[0]);
-        const double ang = 0.0 + (6.283185307179586 - 0.0) * tr.u[1];
-        const double rad = f.hs * 0.6 * std::sqrt(tr.u[2]);
-        const double dx = rad * std::cos(ang), dy = rad * std::sin(ang);
+        const double depth = f.hs * (options.clearance + options.layer_depth * tr.depth_u);
+        const double rad = f.hs * 0.6 * std::sqrt(tr.radius_u);
+        const double dx = rad * std::cos(tr.angle), dy = rad * std::sin(tr.angle);
         for (int ax = 0; ax < 3; ++ax)
           tr.p[ax] = f.s[ax] - depth * n[ax] + dx * f.e1[ax] + dy * f.e2[ax];
         tr.h = sizing(tr.p);
