@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "core/error.h"
-#include "mesher/parallel_for.h"
+#include "core/parallel_for.h"
 
 namespace kdmesh {
 

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <limits>
 
-#include "mesher/parallel_for.h"
+#include "core/parallel_for.h"
 
 namespace kdmesh {
 

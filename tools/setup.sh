@@ -55,6 +55,7 @@ PACKAGES=(
   tetgen
   time
   valgrind
+  zlib1g-dev
 )
 
 install_deps() {

@@ -10,7 +10,7 @@
 
 #include "core/error.h"
 #include "mesher/bucket_scatter.h"
-#include "mesher/parallel_for.h"
+#include "core/parallel_for.h"
 
 namespace kdmesh {
 

@@ -30,7 +30,7 @@
 #include "core/uninit_allocator.h"
 #include "mesher/delaunay/conflict.h"
 #include "mesher/delaunay/predicates.h"
-#include "mesher/parallel_for.h"
+#include "core/parallel_for.h"
 
 namespace kdmesh {
 

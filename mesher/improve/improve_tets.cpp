@@ -9,7 +9,7 @@
 
 #include "core/error.h"
 #include "mesher/bucket_scatter.h"
-#include "mesher/parallel_for.h"
+#include "core/parallel_for.h"
 #include "mesher/volume/volume_mesh.h"
 
 namespace kdmesh {

@@ -22,7 +22,7 @@
 #include "mesher/improve/improve_smooth.h"
 #include "mesher/improve/improve_tets.h"
 #include "mesher/improve/sine_cache.h"
-#include "mesher/parallel_for.h"
+#include "core/parallel_for.h"
 #include "mesher/tet_quality.h"
 
 namespace kdmesh {

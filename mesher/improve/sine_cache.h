@@ -8,7 +8,7 @@
 
 #include "mesher/improve/improve_flips.h"
 #include "mesher/improve/improve_tets.h"
-#include "mesher/parallel_for.h"
+#include "core/parallel_for.h"
 
 namespace kdmesh {
 

@@ -4,7 +4,7 @@
 
 #include <numeric>
 
-#include "mesher/parallel_for.h"
+#include "core/parallel_for.h"
 
 namespace kdmesh {
 

@@ -15,7 +15,7 @@
 #include "core/timer.h"
 #include "core/triangle_distance.h"
 #include "mesher/bucket_scatter.h"
-#include "mesher/parallel_for.h"
+#include "core/parallel_for.h"
 #include "mesher/quality/centroid_sides.h"
 #include "mesher/delaunay/predicates.h"
 

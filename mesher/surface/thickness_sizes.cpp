@@ -7,7 +7,7 @@
 #include <limits>
 #include <vector>
 
-#include "mesher/parallel_for.h"
+#include "core/parallel_for.h"
 
 namespace kdmesh {
 

@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "core/face_samples.h"
-#include "mesher/parallel_for.h"
+#include "core/parallel_for.h"
 
 namespace kdmesh {
 

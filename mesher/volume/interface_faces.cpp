@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "core/error.h"
-#include "mesher/parallel_for.h"
+#include "core/parallel_for.h"
 #include "mesher/tet_quality.h"
 #include "mesher/volume/boundary_faces.h"
 

@@ -24,7 +24,7 @@
 #include "mesher/volume/boundary_faces.h"
 #include "mesher/volume/interface_faces.h"
 #include "mesher/surface/crease_points.h"
-#include "mesher/parallel_for.h"
+#include "core/parallel_for.h"
 #include "mesher/tet_quality.h"
 
 namespace kdmesh {
