@@ -875,5 +875,25 @@ TEST(CheckVolumeMesh, NonManifoldVertexIsCounted) {
   EXPECT_TRUE(named) << failures(c);
 }
 
+// A tet given twice (the face records of the check were made 16 bytes in 2026-11; this pins
+// what they must still find): the first Kuhn tet's two faces inside the cube are then in
+// three tets, and its two faces on the cube's boundary in two tets that see them the same way.
+TEST(CheckVolumeMesh, DuplicatedTetGivesOverfullAndSameSideFaces) {
+  VolumeMesh vm = kuhn_cubes({{0, 0, 0}});
+  vm.tets.insert(vm.tets.end(), vm.tets.begin(), vm.tets.begin() + 4);
+  vm.tet_region.push_back(0);
+  const PreparedSurface s = voxel_surface(Voxels::block(1, 1, 1, 1.0));
+  const SurfaceQuery q(s.mesh);
+  const SizingField h = uniform_size(s, 1.0);
+  const MeshCheck c = check_volume_mesh(vm, {s, q, h});
+  EXPECT_FALSE(c.ok());
+  EXPECT_NE(failures(c).find("2 face(s) shared by more than two tets"), std::string::npos) << failures(c);
+  EXPECT_NE(failures(c).find(" in 3 tets"), std::string::npos) << failures(c);
+  EXPECT_NE(failures(c).find("2 face(s) whose two tets lie on the same side"), std::string::npos) << failures(c);
+  EXPECT_NE(failures(c).find("tets 0/6"), std::string::npos) << failures(c);
+  EXPECT_EQ(c.boundary_faces, 10u);  // the cube's 12, less the duplicated tet's two
+  EXPECT_EQ(c.nonpositive_tets, 0u);
+}
+
 }  // namespace
 }  // namespace kdmesh
