@@ -37,8 +37,10 @@ inline constexpr double kBaseBytes = 16e6;
 /// integration of the sizing field: facets are split until they are small against h; the
 /// solid's bounding cube is split into octants until a cell is small against h, or lies
 /// wholly inside (by the surface distance) where h varies little across it (by the field's
-/// gradation bound). Deterministic. Costs O(estimated nodes / 100) queries; stops early, with
-/// `capped` set, once the node estimate passes `node_cap` (so absurd sizes are refused fast).
+/// gradation bound). Runs on all cores; deterministic (the same figures on any thread count).
+/// Costs O(estimated nodes / 100) queries; stops early, with `capped` set, once the node
+/// estimate passes `node_cap` (so absurd sizes are refused fast): the figures are then those
+/// of node_cap nodes, a lower bound.
 ResourceEstimate estimate_resources(const Domain& domain, double node_cap = 2e9);
 
 }  // namespace kdmesh
