@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <functional>
 #include <limits>
@@ -26,6 +27,7 @@
 #include "core/error.h"
 #include "core/parallel_for.h"
 #include "io/file_io.h"
+#include "io/xml_escape.h"
 
 namespace kdmesh {
 
@@ -47,20 +49,6 @@ struct AppendedArray {
   std::function<void(std::size_t, std::size_t, unsigned char*)> make;
 };
 
-std::string xml_escaped(const std::string& s) {
-  std::string out;
-  for (const char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
 std::string number(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.17g", v);
@@ -77,7 +65,7 @@ std::string range_of(const T* v, std::size_t n) {
 
 std::string attributes(const char* type, const std::string& name, int components,
                        const std::string& range) {
-  std::string a = "type=\"" + std::string(type) + "\" Name=\"" + xml_escaped(name) + "\"";
+  std::string a = "type=\"" + std::string(type) + "\" Name=\"" + xml_escape(name) + "\"";
   if (components > 1) a += " NumberOfComponents=\"" + std::to_string(components) + "\"";
   return a + range;
 }

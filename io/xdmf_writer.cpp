@@ -20,6 +20,7 @@
 #include "core/error.h"
 #include "io/fe_mesh_index.h"
 #include "io/file_io.h"
+#include "io/xml_escape.h"
 
 namespace kdmesh {
 
@@ -142,21 +143,6 @@ void write_hdf5(const FeMesh& mesh, const FeIndex& index, const std::string& h5_
                 mesh.num_faces(), 0, h5_file);
   if (H5Fflush(f, H5F_SCOPE_GLOBAL) < 0 || !file.close())
     throw OutputError(h5_file, "HDF5: cannot flush and close the file");
-}
-
-std::string xml_escape(const std::string& s) {
-  std::string out;
-  for (const char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      default: out += c;
-    }
-  }
-  return out;
 }
 
 std::string data_item(std::size_t rows, std::size_t cols, const char* number_type, int precision,

@@ -240,6 +240,15 @@ TEST(Vtu, AppendedDataIsByteForByteWhatVtksOwnWriterWrites) {
   }
 }
 
+// Array names are XML attribute values: written escaped, read back as given.
+TEST(Vtu, ArrayNamesWithXmlCharactersReadBackAsGiven) {
+  TetMesh m = small_mesh();
+  m.cell_data[0].name = "a<b & \"c\" 'd'>";
+  const std::string path = scratch(".vtu");
+  write_vtu(m, path);
+  expect_same_mesh(path, m);
+}
+
 TEST(Vtu, EmptyMesh) {
   const std::string path = scratch(".vtu");
   write_vtu(TetMesh{}, path);
