@@ -306,16 +306,11 @@ class BoxGrid {
   /// facets (a gear's teeth) p lies in many facet boxes, and a box bound alone let ~120
   /// triangles per query be computed. The minimum is of the same point-triangle distances
   /// as the tree's, computed in another order of operations: equal up to rounding.
-  /// `facet`, if given, receives the facet at that distance (the first found of equal ones).
-  double nearest(const double* p, int max_ring, std::uint32_t* facet = nullptr) const {
+  double nearest(const double* p, int max_ring) const {
     int c0[3];
     for (int k = 0; k < 3; ++k) c0[k] = index(k, p[k]);
     const double scale = std::fabs(p[0]) + std::fabs(p[1]) + std::fabs(p[2]);
     double best2 = std::numeric_limits<double>::infinity();
-    std::uint32_t best_f = std::numeric_limits<std::uint32_t>::max();
-    const auto consider = [&](std::uint32_t f, double d2) {
-      if (d2 < best2) best2 = d2, best_f = f;
-    };
     constexpr std::size_t kPending = 256;
     std::array<std::pair<double, std::uint32_t>, kPending> pending;  // (lower bound^2, facet)
     std::size_t m = 0;
@@ -341,7 +336,7 @@ class BoxGrid {
         if (m < kPending)
           pending[m++] = {d2, f};
         else
-          consider(f, exact2(f));  // a crowded ring: no ordering past kPending
+          best2 = std::min(best2, exact2(f));  // a crowded ring: no ordering past kPending
       }
     };
     // The pending facets, lowest bound first, while a bound is below the nearest so far.
@@ -352,7 +347,7 @@ class BoxGrid {
           if (pending[j].first < pending[i].first) i = j;
         if (!(pending[i].first < best2)) break;
         const std::uint32_t f = pending[i].second;
-        consider(f, exact2(f));
+        best2 = std::min(best2, exact2(f));
         std::size_t keep = 0;  // drop f (listed once per cell) and what can no longer win
         for (std::size_t j = 0; j < m; ++j)
           if (pending[j].second != f && pending[j].first < best2) pending[keep++] = pending[j];
@@ -380,10 +375,8 @@ class BoxGrid {
           }
         }
       settle();
-      if (reach == std::numeric_limits<double>::infinity() || (reach > 0 && best2 <= reach * reach)) {
-        if (facet) *facet = best_f;
+      if (reach == std::numeric_limits<double>::infinity() || (reach > 0 && best2 <= reach * reach))
         return std::sqrt(best2);
-      }
       if (r == max_ring) return std::numeric_limits<double>::quiet_NaN();
     }
   }
@@ -433,21 +426,6 @@ int SurfaceQuery::side(const double* p) const {
 }
 
 double SurfaceQuery::closest(const double* p, double* out, std::uint32_t* facet) const {
-  // As distance(): near the surface the facet grid finds the nearest facet (CGAL's tree took
-  // 0.24 s of CPU in pinion.ply's boundary judgement alone); its closest point is then the
-  // same computation as the grid's distance.
-  if (std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2])) {
-    std::uint32_t f = 0;
-    const double d = impl_->boxes.nearest(p, 2, &f);
-    if (d == d && f < impl_->triangles.size()) {
-      const K::Triangle_3& t = impl_->triangles[f];
-      const double a[3] = {t[0].x(), t[0].y(), t[0].z()}, b[3] = {t[1].x(), t[1].y(), t[1].z()},
-                   c[3] = {t[2].x(), t[2].y(), t[2].z()};
-      closest_on_triangle(p, a, b, c, out);
-      if (facet) *facet = f;
-      return d;
-    }
-  }
   const K::Point_3 q(p[0], p[1], p[2]);
   const auto [c, id] = impl_->tree.closest_point_and_primitive(q);
   out[0] = c.x();
