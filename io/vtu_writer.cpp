@@ -14,6 +14,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -39,6 +40,8 @@ constexpr int kZlibLevel = 1;
 /// Uncompressed bytes per block: VTK's default, a multiple of every element size written.
 constexpr std::size_t kBlock = 32768;
 constexpr std::uint8_t kVtkTetra = 10;
+// The arrays' bytes are written as they lie in memory, under byte_order="LittleEndian".
+static_assert(std::endian::native == std::endian::little, "write_vtu writes native bytes as little-endian");
 
 /// One appended array: its XML attributes and its raw little-endian bytes, either in memory
 /// (`data`) or made block by block (`make(first_byte, bytes, out)`).
