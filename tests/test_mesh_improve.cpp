@@ -851,6 +851,33 @@ TEST(ImproveTets, RegressionFemurTetWithOneSurfaceVertexOutside) {
   EXPECT_TRUE(m.inside_ok(tet.data(), q));
 }
 
+// The quality pass takes the adjacency the Delaunay already had (VolumeMesh::tet_adj)
+// instead of matching every face again: it must be the adjacency the matching finds, face
+// reference for face reference, and the pass leaves it empty once the tets changed.
+TEST(ImproveTets, TheMeshersAdjacencyIsTheOneFaceMatchingFinds) {
+  Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.25, 0.2);
+  const std::size_t nt = p.mesh.num_tets();
+  ASSERT_EQ(p.mesh.tet_adj.size(), 4 * nt);
+  std::size_t boundary = 0;
+  for (std::size_t f = 0; f < 4 * nt; ++f) {
+    const std::uint32_t a = p.mesh.tet_adj[f];
+    if (a == kNoAdjacentTet) {
+      ++boundary;
+      continue;
+    }
+    ASSERT_LT(a / 4, nt);
+    EXPECT_EQ(p.mesh.tet_adj[a], f) << "face reference " << f << " is not mutual";
+  }
+  EXPECT_EQ(boundary, p.mesh.boundary.size() / 3);
+  NodeSet n1 = p.mesh.nodes, n2 = p.mesh.nodes;
+  const ImproveTets matched(n1, p.mesh.tets, p.mesh.tet_region);
+  const ImproveTets given(n2, p.mesh.tets, p.mesh.tet_region, &p.mesh.tet_adj);
+  for (std::uint32_t t = 0; t < nt; ++t)
+    for (int i = 0; i < 4; ++i) ASSERT_EQ(given.adj(t, i), matched.adj(t, i)) << "slot " << t << " face " << i;
+  improve_mesh(p.mesh, {p.surface, *p.query, p.sizing});
+  EXPECT_TRUE(p.mesh.tet_adj.empty());
+}
+
 TEST(MeshImprove, GradedCubeKeepsEveryInvariantAndRaisesTheWorstAngle) {
   Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.15, 0.0);
   const VolumeMesh before = p.mesh;

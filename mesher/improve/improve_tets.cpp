@@ -32,7 +32,7 @@ Key face_key(const std::uint32_t* v, int i) {
 }  // namespace
 
 ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
-                         const std::vector<std::uint32_t>& region)
+                         const std::vector<std::uint32_t>& region, const std::vector<std::uint32_t>* adjacency)
     : nodes_(&nodes) {
   const std::size_t nt = tets.size() / 4, np = nodes.size_count();
   for (std::size_t i = 0; i < 4 * nt; ++i)
@@ -42,8 +42,8 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
   // Slots in the order of each tet's smallest vertex id (a counting sort; stable): the tets
   // around a vertex then lie close together in memory when nearby nodes have nearby ids,
   // which the passes' star walks (and the input order, in insertion order) need.
+  std::vector<std::uint32_t> order(nt);  // slot -> input tet
   {
-    std::vector<std::uint32_t> order(nt);
     bucket_scatter(
         nt, np,
         [&](std::size_t t) {
@@ -66,6 +66,25 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
   inside_known_.assign(nt, 0);
   for (std::size_t t = 0; t < nt; ++t)
     for (int i = 0; i < 4; ++i) vtet_[tv_[4 * t + i]] = std::uint32_t(t);
+  if (adjacency && adjacency->size() == 4 * nt) {
+    // The given adjacency, in slots (a slot's vertices are its tet's, in the same order).
+    std::vector<std::uint32_t> slot_of(nt);
+    for (std::size_t s = 0; s < nt; ++s) slot_of[order[s]] = std::uint32_t(s);
+    parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
+      for (std::size_t s = b; s < e; ++s)
+        for (int i = 0; i < 4; ++i) {
+          const std::uint32_t a = (*adjacency)[4 * std::size_t(order[s]) + i];
+          ta_[4 * s + i] = a == kNoAdjacentTet ? kImproveNone : 4 * slot_of[a >> 2] + (a & 3);
+        }
+    }, 1 << 16);
+  } else {
+    match_faces(np);
+  }
+  lock_interfaces(np);
+}
+
+void ImproveTets::match_faces(std::size_t np) {
+  const std::size_t nt = tv_.size() / 4;
   // Faces bucketed by their smallest vertex (counting sort), each bucket sorted by the two
   // other vertices, equal neighbours matched.
   struct Rec {
@@ -102,6 +121,10 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
     if (overfull[k])
       throw CheckError("improve_mesh: a face at node " + std::to_string(k) +
                        " is shared by more than two tets");
+}
+
+void ImproveTets::lock_interfaces(std::size_t np) {
+  const std::size_t nt = tv_.size() / 4;
   // Interfaces between regions (touching bodies) are kept as they are: their nodes are locked.
   locked_.assign(np, 0);
   for (std::size_t t = 0; t < nt; ++t)
@@ -475,6 +498,7 @@ std::size_t ImproveTets::write_back(VolumeMesh& mesh) const {
       out.push_back(nodes_->points.p(std::uint32_t(i)), nodes_->kind[i], nodes_->facet[i],
                     nodes_->size[i]);
   mesh.tets = std::move(tets);
+  mesh.tet_adj.clear();  // the tets changed
   mesh.tet_region = std::move(region);
   mesh.boundary = std::move(boundary);
   mesh.boundary_tet = std::move(boundary_tet);

@@ -29,9 +29,12 @@ class ImproveTets {
  public:
   /// Builds the face adjacency of `tets` (4 ids into `nodes` per tet, positively oriented;
   /// every face in at most two tets, else CheckError) with one region id per tet. `nodes` is
-  /// referenced, not copied: moved vertices are written to it.
+  /// referenced, not copied: moved vertices are written to it. `adjacency`, if given with 4
+  /// entries per tet (VolumeMesh::tet_adj), is taken as that adjacency instead of matching
+  /// the faces.
   ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
-              const std::vector<std::uint32_t>& region);
+              const std::vector<std::uint32_t>& region,
+              const std::vector<std::uint32_t>* adjacency = nullptr);
 
   NodeSet& nodes() { return *nodes_; }
   const NodeSet& nodes() const { return *nodes_; }
@@ -188,6 +191,10 @@ class ImproveTets {
   std::size_t write_back(VolumeMesh& mesh) const;
 
  private:
+  /// The constructor's two halves: ta_ from matching the tets' faces (CheckError if a face is
+  /// in more than two), and locked_ for the nodes of faces between regions.
+  void match_faces(std::size_t np);
+  void lock_interfaces(std::size_t np);
   void link_face(std::uint32_t t, int i, std::uint32_t ref);
   /// One step around an edge: from tet cur, holding the edge and the vertices c and d, over
   /// its face opposite c. False at the boundary; else cur is the next tet and (c, d) become

@@ -281,7 +281,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain, const ImproveO
   ImproveStats st;
   const int total_stages = 1 + 2 * options.rounds + std::min(options.rounds, options.relax_rounds) +
                            (options.rounds > 0 && (options.cap_angle > 0 || options.split_angle > 0));
-  ImproveTets m(mesh.nodes, mesh.tets, mesh.tet_region);
+  ImproveTets m(mesh.nodes, mesh.tets, mesh.tet_region, &mesh.tet_adj);
   m.inside_query = &query;
   m.region_query = domain.regions;
   m.certify_inside();

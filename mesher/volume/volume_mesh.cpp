@@ -720,6 +720,16 @@ void compact_result(const Triangulation& tri, const std::vector<std::uint8_t>& i
     }
     out.tet_region.push_back(region_of.empty() ? 0 : region_of[t]);
   }
+  out.tet_adj.resize(4 * std::size_t(count));
+  parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t t = b; t < e; ++t) {
+      if (new_tet[t] == kNone) continue;
+      for (int i = 0; i < 4; ++i) {
+        const std::uint32_t a = tri.adj(t, i), u = new_tet[a >> 2];
+        out.tet_adj[4 * std::size_t(new_tet[t]) + i] = u == kNone ? kNoAdjacentTet : 4 * u + (a & 3);
+      }
+    }
+  }, 1 << 16);
   st.unused_nodes = nodes.size_count() - nn;
   out.nodes.points.xyz.resize(3 * std::size_t(nn));
   out.nodes.kind.resize(nn);

@@ -60,12 +60,19 @@ struct VolumeMeshStats {
 /// (interior nodes dropped for being too close to the surface and nodes no inside tet uses
 /// are removed), followed by the Steiner points; point ids refer to `nodes`. Every tet is
 /// positively oriented.
+inline constexpr std::uint32_t kNoAdjacentTet = 0xFFFFFFFFu;
+
 struct VolumeMesh {
   NodeSet nodes;                          ///< input nodes + Steiner points (kind surface/edge)
   std::vector<std::uint32_t> tets;        ///< 4 node ids per tet
   std::vector<std::uint32_t> tet_region;  ///< body id (PreparedSurface) per tet
   std::vector<std::uint32_t> boundary;    ///< 3 node ids per boundary face, normal outward
   std::vector<std::uint32_t> boundary_tet;  ///< the tet each boundary face belongs to
+  /// The face adjacency the Delaunay already had, 4 per tet: tet_adj[4 t + i] = 4 u + j when
+  /// face i of t (opposite its vertex i) is face j of tet u, kNoAdjacentTet on the boundary.
+  /// The quality pass takes it instead of matching 4 x tets faces again (pinion.ply: 0.17 s),
+  /// and leaves it empty (tets changed). Empty also means "unknown": consumers rebuild it.
+  std::vector<std::uint32_t> tet_adj;
   VolumeMeshStats stats;
 
   std::size_t num_tets() const { return tets.size() / 4; }
