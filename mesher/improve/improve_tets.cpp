@@ -498,7 +498,7 @@ std::size_t ImproveTets::write_back(VolumeMesh& mesh) const {
       out.push_back(nodes_->points.p(std::uint32_t(i)), nodes_->kind[i], nodes_->facet[i],
                     nodes_->size[i]);
   mesh.tets = std::move(tets);
-  mesh.tet_adj.clear();  // the tets changed
+  std::vector<std::uint32_t>().swap(mesh.tet_adj);  // the tets changed
   mesh.tet_region = std::move(region);
   mesh.boundary = std::move(boundary);
   mesh.boundary_tet = std::move(boundary_tet);

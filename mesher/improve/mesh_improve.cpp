@@ -282,6 +282,7 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain, const ImproveO
   const int total_stages = 1 + 2 * options.rounds + std::min(options.rounds, options.relax_rounds) +
                            (options.rounds > 0 && (options.cap_angle > 0 || options.split_angle > 0));
   ImproveTets m(mesh.nodes, mesh.tets, mesh.tet_region, &mesh.tet_adj);
+  std::vector<std::uint32_t>().swap(mesh.tet_adj);  // taken into m; freed (16 bytes a tet)
   m.inside_query = &query;
   m.region_query = domain.regions;
   m.certify_inside();

@@ -71,7 +71,7 @@ struct VolumeMesh {
   /// The face adjacency the Delaunay already had, 4 per tet: tet_adj[4 t + i] = 4 u + j when
   /// face i of t (opposite its vertex i) is face j of tet u, kNoAdjacentTet on the boundary.
   /// The quality pass takes it instead of matching 4 x tets faces again (pinion.ply: 0.17 s),
-  /// and leaves it empty (tets changed). Empty also means "unknown": consumers rebuild it.
+  /// and frees it (its tets change). Empty also means "unknown": consumers rebuild it.
   std::vector<std::uint32_t> tet_adj;
   VolumeMeshStats stats;
 
