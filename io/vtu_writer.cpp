@@ -58,19 +58,24 @@ std::string number(double v) {
   return buf;
 }
 
-/// ' RangeMin="lo" RangeMax="hi"' over `n` values (none for an empty array).
+/// ' RangeMin="lo" RangeMax="hi"'.
+std::string range(double lo, double hi) {
+  return " RangeMin=\"" + number(lo) + "\" RangeMax=\"" + number(hi) + "\"";
+}
+
+/// The range of `n` values (none for an empty array).
 template <class T>
 std::string range_of(const T* v, std::size_t n) {
   if (n == 0) return "";
   const auto [lo, hi] = std::minmax_element(v, v + n);
-  return " RangeMin=\"" + number(double(*lo)) + "\" RangeMax=\"" + number(double(*hi)) + "\"";
+  return range(double(*lo), double(*hi));
 }
 
 std::string attributes(const char* type, const std::string& name, int components,
-                       const std::string& range) {
+                       const std::string& range_attr) {
   std::string a = "type=\"" + std::string(type) + "\" Name=\"" + xml_escape(name) + "\"";
   if (components > 1) a += " NumberOfComponents=\"" + std::to_string(components) + "\"";
-  return a + range;
+  return a + range_attr;
 }
 
 template <class T>
@@ -123,11 +128,14 @@ std::vector<AppendedArray> arrays_of(const TetMesh& mesh) {
   for (const DataArray& a : mesh.cell_data) out.push_back(data_array(a, nt, "cell"));
 
   // Points: VTK's range of a vector array is that of its lengths.
-  std::vector<double> lengths(np);
-  const double* p = mesh.points.xyz.data();
-  for (std::size_t i = 0; i < np; ++i)
-    lengths[i] = std::sqrt(p[3 * i] * p[3 * i] + p[3 * i + 1] * p[3 * i + 1] + p[3 * i + 2] * p[3 * i + 2]);
-  out.push_back(in_memory("Float64", "Points", 3, mesh.points.xyz, range_of(lengths.data(), np)));
+  double lo = INFINITY, hi = -INFINITY;
+  for (std::size_t i = 0; i < np; ++i) {
+    const double* p = mesh.points.p(std::uint32_t(i));
+    const double len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    lo = std::min(lo, len), hi = std::max(hi, len);
+  }
+  const std::string points_range = np ? range(lo, hi) : "";
+  out.push_back(in_memory("Float64", "Points", 3, mesh.points.xyz, points_range));
 
   // Cells: connectivity, the end offset of each cell, and the cell types. Int32 while every
   // offset (4 x tets) and point id fits, else Int64 (readers take both; Int32 halves what is
