@@ -189,5 +189,36 @@ TEST(SurfaceQuery, SegmentsTouchingTheSurfaceAtOnePointAreNotClear) {
   EXPECT_FALSE(q.segment_clear(corner, corner));  // a point on the surface
 }
 
+// segment_clear passes over a facet when both ends lie on one side of its plane, farther than
+// the rounding slack of the computed distance, and otherwise asks the exact test. The cube's
+// facets lie in coordinate planes, so points exactly on them are representable: a segment
+// ending on a facet, or at any distance down to one ulp of the plane, is judged like the exact
+// test; so is a segment in the plane of a facet, beside the cube or across its edge.
+TEST(SurfaceQuery, SegmentsEndingOnAFacetOrBesideItsPlaneAreJudgedExactly) {
+  SurfaceMesh s;
+  for (int i = 0; i < 8; ++i) s.points.push_back(i & 1 ? 1.0 : -1.0, i & 2 ? 1.0 : -1.0, i & 4 ? 1.0 : -1.0);
+  s.tris = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+            2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+  const SurfaceQuery q(s);
+  Rng rng(11);
+  for (int i = 0; i < 4000; ++i) {
+    const int axis = i % 3;
+    double on[3], off[3];
+    for (int k = 0; k < 3; ++k) on[k] = rng.uniform(-0.85, 0.85);  // off stays within the other faces
+    on[axis] = 1;  // on the facet
+    const double gap = std::ldexp(1.0, -int(rng.uniform(1, 53)));  // 2^-1 .. 2^-52
+    for (int k = 0; k < 3; ++k) off[k] = on[k] + rng.uniform(-0.1, 0.1);
+    off[axis] = i % 2 ? 1 + gap : 1 - gap;  // outside or inside, down to one ulp of 1
+    ASSERT_FALSE(q.segment_clear(off, on)) << "segment " << i;
+    double near[3] = {on[0], on[1], on[2]};
+    near[axis] = off[axis];
+    ASSERT_TRUE(q.segment_clear(off, near)) << "segment " << i;  // parallel to the facet, off it
+    ASSERT_EQ(q.side(near), i % 2 ? -1 : 1);
+  }
+  const double beside_a[3] = {1.5, 0, 1}, beside_b[3] = {2, 0.5, 1}, across[3] = {0.5, 0, 1};
+  EXPECT_TRUE(q.segment_clear(beside_a, beside_b));  // in the plane z = 1, off the cube
+  EXPECT_FALSE(q.segment_clear(beside_a, across));   // in that plane, over the facet's edge
+}
+
 }  // namespace
 }  // namespace kdmesh

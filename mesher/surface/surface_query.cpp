@@ -288,6 +288,18 @@ class BoxGrid {
         }
     return true;
   }
+  /// Points a and b lie strictly on one side of facet f's plane, each farther from it than
+  /// the rounding slack of its computed plane distance (build()): then the segment ab cannot
+  /// meet the facet. False when in doubt, and always for a facet without a plane bound.
+  bool plane_separates(std::uint32_t facet, const double* a, const double* b) const {
+    const double* pl = &planes_[6 * std::size_t(facet)];
+    const double da = pl[0] * a[0] + pl[1] * a[1] + pl[2] * a[2] - pl[3];
+    const double sa = pl[4] * (std::fabs(a[0]) + std::fabs(a[1]) + std::fabs(a[2]) + pl[5]);
+    if (!(std::fabs(da) > sa)) return false;
+    const double db = pl[0] * b[0] + pl[1] * b[1] + pl[2] * b[2] - pl[3];
+    const double sb = pl[4] * (std::fabs(b[0]) + std::fabs(b[1]) + std::fabs(b[2]) + pl[5]);
+    return da > 0 ? db > sb : db < -sb;
+  }
   /// Facet f's bounding box meets the closed box [a, b] (exact comparisons).
   bool box_meets(std::uint32_t facet, const double* a, const double* b) const {
     const std::array<double, 6>& f = boxes_[facet];
@@ -445,7 +457,11 @@ bool SurfaceQuery::segment_clear(const double* a, const double* b) const {
   bool meets = false;
   const bool searched = impl_->boxes.facets_near(lo, hi, 64, [&](std::uint32_t f) {
     if (meets || !impl_->boxes.box_meets(f, lo, hi)) return;
-    meets = point || K().do_intersect_3_object()(seg, impl_->triangles[f]);
+    if (point) {
+      meets = true;
+    } else if (!impl_->boxes.plane_separates(f, a, b)) {  // a cheap bound first, then exact
+      meets = K().do_intersect_3_object()(seg, impl_->triangles[f]);
+    }
   });
   if (searched) return !meets;  // always for a point: its box spans one cell
   return !impl_->tree.do_intersect(seg);
