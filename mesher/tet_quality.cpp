@@ -64,21 +64,20 @@ TetQuality tet_quality(const double* a, const double* b, const double* c, const 
     area2[f] = norm(n[f]);  // twice the face area
     area_sum += area2[f] / 2;
   }
-  double min_dih = 180, max_dih = 0;
+  // The angle falls as its cosine rises: the extreme angles are those of the extreme cosines,
+  // two arc cosines per tet rather than six.
+  double max_cos = -1, min_cos = 1;
   for (int k = 0; k < 4; ++k)
     for (int l = k + 1; l < 4; ++l) {
-      double ang;
-      if (area2[k] == 0 || area2[l] == 0) {
-        ang = 0;  // a face of zero area: the tet is flat there
-      } else {
-        const double cosang = std::clamp(-dot(n[k], n[l]) / (area2[k] * area2[l]), -1.0, 1.0);
-        ang = std::acos(cosang) * 180 / kPi;
-      }
-      min_dih = std::min(min_dih, ang);
-      max_dih = std::max(max_dih, ang);
+      // A face of zero area: the tet is flat there (angle 0, cosine 1).
+      const double cosang = area2[k] == 0 || area2[l] == 0
+                                ? 1.0
+                                : std::clamp(-dot(n[k], n[l]) / (area2[k] * area2[l]), -1.0, 1.0);
+      max_cos = std::max(max_cos, cosang);
+      min_cos = std::min(min_cos, cosang);
     }
-  q.min_dihedral = min_dih;
-  q.max_dihedral = max_dih;
+  q.min_dihedral = std::acos(max_cos) * 180 / kPi;
+  q.max_dihedral = std::acos(min_cos) * 180 / kPi;
 
   // Edge lengths.
   double l2_min = std::numeric_limits<double>::infinity();

@@ -862,5 +862,51 @@ TEST(SizeFidelity, AwayFromRefinementCountsOnlyEdgesTheFieldLeavesAtTheUsersSize
   EXPECT_GT(f.mean_ratio, 2);  // the refined tet's edges are long for h = 0.1 + ...
 }
 
+// The edges whose midpoints the field refines are found even when neither end is near the
+// refinement: the figures equal those of the field evaluated at every midpoint. measure_size_
+// fidelity skips the midpoints of a vertex's edges when the field is h_max over a ball of half
+// its longest edge; a ball of zero radius (the vertex alone) would skip the long edge below,
+// whose ends are 5 from the point zone (h = 1 there) and whose midpoint is 0.5 from it.
+TEST(SizeFidelity, EqualsTheFieldEvaluatedAtEveryMidpoint) {
+  PointSet p;
+  p.push_back(-5, 0.5, 0);   // the long edge (0, 1) passes the zone at the origin
+  p.push_back(5, 0.5, 0);
+  p.push_back(0, 8, 0);
+  p.push_back(0, 6, 7);
+  Rng rng(3);
+  for (int i = 0; i < 200; ++i) p.push_back(rng.uniform(-9, 9), rng.uniform(-9, 9), rng.uniform(-9, 9));
+  std::vector<std::uint32_t> tets = {0, 1, 2, 3};
+  for (std::uint32_t i = 4; i + 3 < p.size(); i += 2) tets.insert(tets.end(), {i, i + 1, i + 2, i + 3});
+  SurfaceMesh s;
+  s.points = p;
+  const SizingField h = point_zone_field(s, 1, 0.1, {0, 0, 0});
+  const SizeFidelity f = measure_size_fidelity(p, tets, h);
+  // By hand: every distinct edge, the field at its midpoint.
+  std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
+  for (std::size_t t = 0; t < tets.size(); t += 4)
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) edges.insert(std::minmax(tets[t + i], tets[t + j]));
+  double sum = 0, lo = INFINITY, hi = 0;
+  std::size_t in = 0, refined = 0;
+  for (const auto& [a, b] : edges) {
+    const double *pa = p.p(a), *pb = p.p(b);
+    const double m[3] = {(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2};
+    const double r = std::hypot(pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]) / h(m);
+    sum += r;
+    lo = std::min(lo, r);
+    hi = std::max(hi, r);
+    in += r >= 0.7 && r <= 1.4;
+    refined += h(m) < 1;
+  }
+  ASSERT_EQ(f.edges, edges.size());
+  EXPECT_GT(refined, 0u);
+  EXPECT_NEAR(f.mean_ratio, sum / double(edges.size()), 1e-12 * sum / double(edges.size()));
+  EXPECT_EQ(f.min_ratio, lo);
+  EXPECT_EQ(f.max_ratio, hi);
+  EXPECT_DOUBLE_EQ(f.in_range, double(in) / double(edges.size()));
+  // The long edge: 10 long, h = 0.1 + 0.3 * 0.5 at its midpoint.
+  EXPECT_DOUBLE_EQ(hi, 10 / 0.25);
+}
+
 }  // namespace
 }  // namespace kdmesh

@@ -2,6 +2,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -76,6 +77,46 @@ TEST(TetQuality, FlatSliver) {
   EXPECT_GT(q.radius_ratio, 0);
   EXPECT_LT(q.radius_ratio, 1e-5);
   EXPECT_LT(q.volume_length, 1e-5);
+}
+
+// The extreme dihedrals are the smallest and largest of all six, each computed as pi less the
+// angle between the two faces' outward normals (tet_quality takes the arc cosine of the
+// extreme cosines only).
+TEST(TetQuality, ExtremeDihedralsAreTheExtremesOfAllSix) {
+  std::uint64_t x = 12345;
+  auto uniform = [&] {  // a 64-bit LCG: enough for shapes
+    x = x * 6364136223846793005ull + 1442695040888963407ull;
+    return double(x >> 11) / double(1ull << 53);
+  };
+  for (int i = 0; i < 2000; ++i) {
+    double p[4][3];
+    for (auto& q : p)
+      for (double& c : q) c = uniform();
+    if (i % 4 == 0)
+      for (int k = 0; k < 3; ++k) p[3][k] = p[0][k] + 1e-3 * (p[3][k] - p[0][k]);  // needles and slivers
+    static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+    std::array<double, 3> n[4];
+    for (int f = 0; f < 4; ++f) {
+      const double* a = p[kFace[f][0]];
+      const double* b = p[kFace[f][1]];
+      const double* c = p[kFace[f][2]];
+      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      n[f] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+      const double len = std::hypot(n[f][0], n[f][1], n[f][2]);
+      for (double& c2 : n[f]) c2 /= len;
+    }
+    double lo = 180, hi = 0;
+    for (int k = 0; k < 4; ++k)
+      for (int l = k + 1; l < 4; ++l) {
+        const double c = n[k][0] * n[l][0] + n[k][1] * n[l][1] + n[k][2] * n[l][2];
+        const double a = 180 - deg(std::acos(std::clamp(c, -1.0, 1.0)));
+        lo = std::min(lo, a);
+        hi = std::max(hi, a);
+      }
+    const TetQuality q = tet_quality(p[0], p[1], p[2], p[3]);
+    ASSERT_NEAR(q.min_dihedral, lo, 1e-7) << "tet " << i;  // either orientation: both normals flip
+    ASSERT_NEAR(q.max_dihedral, hi, 1e-7) << "tet " << i;
+  }
 }
 
 TEST(TetQuality, InvertedAndDegenerate) {

@@ -57,10 +57,28 @@ SizeFidelity measure_size_fidelity(const PointSet& points, const std::vector<std
   r.edges = ne;
   if (ne == 0) return r;
   const double far = sizing.max_size();
+  // Each vertex's reach: half its longest edge, so that the midpoints of its edges are within it.
+  std::vector<double> reach(np, 0.0);
+  for (std::size_t i = 0; i < ne; ++i) {
+    const double* a = points.p(from[i]);
+    const double* c = points.p(to[i]);
+    const double half = std::hypot(c[0] - a[0], c[1] - a[1], c[2] - a[2]) / 2;
+    reach[from[i]] = std::max(reach[from[i]], half);
+    reach[to[i]] = std::max(reach[to[i]], half);
+  }
   // The field is exactly h_max where nothing refines it (a min over terms that are all >= it).
-  std::vector<std::uint8_t> unrefined(np);
+  // `clear`: h_max over the whole ball of the vertex's reach (a lower bound of the field there,
+  // taken over a ball a little larger than the reach so that the bound's rounding cannot matter),
+  // so at the midpoint of each of its edges: most edges of a mesh at one size (1.3M edges
+  // evaluated on pinion.ply, 98% of them h_max, where 200k vertex bounds decide most of them).
+  std::vector<std::uint8_t> unrefined(np), clear(np);
   parallel_for(np, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t v = b; v < e; ++v) unrefined[v] = !(sizing(points.p(std::uint32_t(v))) < far);
+    for (std::size_t v = b; v < e; ++v) {
+      const double* x = points.p(std::uint32_t(v));
+      const double margin = 1e-6 * reach[v] + 1e-12 * (std::fabs(x[0]) + std::fabs(x[1]) + std::fabs(x[2]));
+      clear[v] = !(sizing.lower_bound(x, reach[v] + margin) < far);
+      unrefined[v] = clear[v] || !(sizing(x) < far);
+    }
   }, 1024);
   // Fixed blocks of edges, summed in order: the same figures on any number of threads.
   struct Part {
@@ -77,7 +95,7 @@ SizeFidelity measure_size_fidelity(const PointSet& points, const std::vector<std
         const double* c = points.p(to[i]);
         const double m[3] = {(a[0] + c[0]) / 2, (a[1] + c[1]) / 2, (a[2] + c[2]) / 2};
         const double length = std::hypot(c[0] - a[0], c[1] - a[1], c[2] - a[2]);
-        const double hm = sizing(m);
+        const double hm = clear[from[i]] || clear[to[i]] ? far : sizing(m);
         const double ratio = length / hm;
         p.sum += ratio;
         if (!(hm < far) && unrefined[from[i]] && unrefined[to[i]]) {
