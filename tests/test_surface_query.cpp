@@ -11,6 +11,11 @@
 #include <vector>
 #include <utility>
 
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
 #include "core/rng.h"
 #include "core/triangle_distance.h"
 #include "mesher/surface/surface_query.h"
@@ -218,6 +223,63 @@ TEST(SurfaceQuery, SegmentsEndingOnAFacetOrBesideItsPlaneAreJudgedExactly) {
   const double beside_a[3] = {1.5, 0, 1}, beside_b[3] = {2, 0.5, 1}, across[3] = {0.5, 0, 1};
   EXPECT_TRUE(q.segment_clear(beside_a, beside_b));  // in the plane z = 1, off the cube
   EXPECT_FALSE(q.segment_clear(beside_a, across));   // in that plane, over the facet's edge
+}
+
+// closest() answers from the facet grid where one facet is nearest by a margin, and from
+// CGAL's AABB tree elsewhere. Either way the answer must be the tree's, bit for bit: the point,
+// the facet and the distance. The cube's points on its edges and corners (and the sphere's on
+// its facets' edges) are ties, where the tree's choice depends on its traversal.
+TEST(SurfaceQuery, ClosestIsTheAabbTreesAnswerBitForBit) {
+  using K = CGAL::Epick;
+  using Triangles = std::vector<K::Triangle_3>;
+  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, CGAL::AABB_triangle_primitive<K, Triangles::const_iterator>>>;
+  SurfaceMesh cube;
+  for (int i = 0; i < 8; ++i) cube.points.push_back(i & 1 ? 1.0 : -1.0, i & 2 ? 1.0 : -1.0, i & 4 ? 1.0 : -1.0);
+  cube.tris = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+               2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+  for (const SurfaceMesh& s : {sphere(10, 3), cube}) {
+    Triangles tris;
+    for (std::size_t f = 0; f < s.num_tris(); ++f) {
+      const double *a = s.points.p(s.tri(f)[0]), *b = s.points.p(s.tri(f)[1]), *c = s.points.p(s.tri(f)[2]);
+      tris.emplace_back(K::Point_3(a[0], a[1], a[2]), K::Point_3(b[0], b[1], b[2]), K::Point_3(c[0], c[1], c[2]));
+    }
+    // Built as SurfaceQuery builds its own: at ties the answer depends on it (the tree made by
+    // the range constructor picks another of the tied facets).
+    Tree tree;
+    tree.insert(tris.cbegin(), tris.cend());
+    tree.build();
+    tree.accelerate_distance_queries();
+    const SurfaceQuery q(s);
+    double extent = 0;
+    for (double x : s.points.xyz) extent = std::max(extent, std::fabs(x));
+    Rng rng(7);
+    int ties = 0;
+    for (int i = 0; i < 6000; ++i) {
+      double p[3];
+      if (i % 3 == 0) {  // on an edge of a facet, or off it along the facet's normal-ish
+        const std::uint32_t* t = s.tri(std::size_t(rng.uniform(0, double(s.num_tris()) - 1e-9)));
+        const double w = i % 2 ? 0.5 : rng.uniform();
+        const double *a = s.points.p(t[0]), *b = s.points.p(t[1]);
+        const double lift = i % 9 == 0 ? 0.0 : rng.uniform(-0.3, 0.3);
+        for (int k = 0; k < 3; ++k) p[k] = (1 + lift) * (a[k] + w * (b[k] - a[k]));
+        ++ties;
+      } else {
+        const double r = (i % 3 == 1 ? 0.5 : 1.3) * extent;
+        for (double& x : p) x = rng.uniform(-r, r);
+      }
+      double out[3];
+      std::uint32_t facet = 0;
+      const double d = q.closest(p, out, &facet);
+      const K::Point_3 qp(p[0], p[1], p[2]);
+      const auto [c, id] = tree.closest_point_and_primitive(qp);
+      ASSERT_EQ(out[0], c.x()) << "point " << i;
+      ASSERT_EQ(out[1], c.y()) << "point " << i;
+      ASSERT_EQ(out[2], c.z()) << "point " << i;
+      ASSERT_EQ(facet, std::uint32_t(id - tris.cbegin())) << "point " << i;
+      ASSERT_EQ(d, std::sqrt(CGAL::squared_distance(qp, c))) << "point " << i;
+    }
+    EXPECT_GT(ties, 1000);
+  }
 }
 
 }  // namespace
