@@ -741,7 +741,11 @@ TEST(SizingField, ConcurrentQueriesAgreeWithSerial) {
   std::uniform_real_distribution<double> u(-1.5, 1.5);
   for (int i = 0; i < 20000; ++i) pts.insert(pts.end(), {u(rng), u(rng), 1.5 + u(rng)});
   std::vector<double> serial(pts.size() / 3), parallel(pts.size() / 3);
-  for (std::size_t i = 0; i < serial.size(); ++i) serial[i] = h(pts.data() + 3 * i);
+  // A field of its own for the serial pass, so that the two threads below are the first to
+  // ask h's cells (their h_max certificates are made on first use, by either thread).
+  const SizingField h_serial = build_sizing_field(
+      cyl, opts(0.8, 0.4, {sharp, zone(Kind::plane, 0.03, {0, 0, 1.5, 0.3, 0.2, 1.0})}));
+  for (std::size_t i = 0; i < serial.size(); ++i) serial[i] = h_serial(pts.data() + 3 * i);
   const SizingField copy = h;  // copies share the built state
   auto run = [&](const SizingField& f, std::size_t begin, std::size_t step) {
     for (std::size_t i = begin; i < parallel.size(); i += step) parallel[i] = f(pts.data() + 3 * i);
@@ -750,6 +754,30 @@ TEST(SizingField, ConcurrentQueriesAgreeWithSerial) {
   t0.join();
   t1.join();
   EXPECT_EQ(serial, parallel);
+}
+
+// h(x) takes h_max from a table of cells over the surface's box where a lower bound of the
+// field over the cell's ball is h_max; elsewhere it evaluates the zones. Either way it must be
+// the zones' own value, bit for bit (lower_bound at radius 0 evaluates them): here with cells
+// of 0.1 (h_max) across a point zone's and a segment zone's refined balls, sampled densely
+// around their rims, where a cell whose centre is far enough may still hold refined points.
+TEST(SizingField, ClearCellsGiveExactlyTheZonesValue) {
+  SurfaceMesh box;
+  box.points.push_back(0, 0, 0);
+  box.points.push_back(10, 10, 10);
+  const SizingField h = build_sizing_field(
+      box, opts(0.1, 0.3, {zone(Kind::point, 0.02, {5, 5, 5}), zone(Kind::segment, 0.05, {3, 3, 3, 3.5, 4, 3})}));
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> u(2.5, 5.5);
+  int refined = 0, far = 0;
+  for (int i = 0; i < 200000; ++i) {
+    const double x[3] = {u(rng), u(rng), u(rng)};
+    const double want = h.lower_bound(x, 0);
+    ASSERT_EQ(h(x), want) << "at " << x[0] << " " << x[1] << " " << x[2];
+    (want < 0.1 ? refined : far) += 1;
+  }
+  EXPECT_GT(refined, 100);
+  EXPECT_GT(far, 100000);
 }
 
 }  // namespace
