@@ -51,9 +51,12 @@ bool best_triangulation(const ImproveTets& m, const std::vector<std::uint32_t>& 
   const double inf = std::numeric_limits<double>::infinity();
   const double* pa = m.p(a);
   const double* pb = m.p(b);
-  auto tri_q = [&](int i, int k, int j) {
+  // The second tet only when the first is above `above`: otherwise the split loses anyway.
+  auto tri_q = [&](int i, int k, int j, double above) {
     const double *ri = m.p(ring[i]), *rk = m.p(ring[k]), *rj = m.p(ring[j]);
-    return std::min(tet_sine(ri, rj, rk, pa), tet_sine(ri, rk, rj, pb));
+    const double qa = tet_sine(ri, rj, rk, pa);
+    if (!(qa > above)) return qa;
+    return std::min(qa, tet_sine(ri, rk, rj, pb));
   };
   for (int i = 0; i + 1 < n; ++i) best[i][i + 1] = inf, arg[i][i + 1] = -1;
   for (int len = 2; len < n; ++len)
@@ -64,7 +67,7 @@ bool best_triangulation(const ImproveTets& m, const std::vector<std::uint32_t>& 
       for (int k = i + 1; k < j; ++k) {
         double q = std::min(best[i][k], best[k][j]);
         if (q <= bq) continue;  // this split cannot beat the best one
-        q = std::min(q, tri_q(i, k, j));
+        q = std::min(q, tri_q(i, k, j, bq));
         if (q > bq) bq = q, bk = k;
       }
       best[i][j] = bk >= 0 ? bq : -inf;

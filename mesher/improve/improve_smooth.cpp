@@ -161,19 +161,21 @@ class VertexStar {
     return q;
   }
   /// With v at x: the smallest tet_sine of the star (eval) and the sum of its radius ratios
-  /// (-inf if a tet is inverted), in one sweep.
-  SineRatio eval_both(const double* x) const {
+  /// (-inf if a tet is inverted), in one sweep. The sweep stops at the first inverted tet or
+  /// tet_sine below `reject_below`, with the ratio -inf: a move the caller refuses either way.
+  SineRatio eval_both(const double* x, double reject_below = -std::numeric_limits<double>::infinity()) const {
     SineRatio out{std::numeric_limits<double>::infinity(), 0};
-    bool inverted = false;
     for (const StarTet& t : st_) {
       const double* p[4] = {t.p[0], t.p[1], t.p[2], t.p[3]};
       p[t.iv] = x;
       const SineRatio q = tet_sine_ratio(p[0], p[1], p[2], p[3]);
       out.sine = std::min(out.sine, q.sine);
-      inverted = inverted || !(q.ratio > 0);
+      if (!(q.ratio > 0) || out.sine < reject_below) {
+        out.ratio = -std::numeric_limits<double>::infinity();
+        return out;
+      }
       out.ratio += q.ratio;
     }
-    if (inverted) out.ratio = -std::numeric_limits<double>::infinity();
     return out;
   }
   /// Projects x onto the facet plane (surface nodes of a planar fan) or onto the closest
@@ -421,7 +423,7 @@ bool relax_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, dou
     double y[3];
     for (int k = 0; k < 3; ++k) y[k] = x0[k] + f * (c[k] - x0[k]);
     if (!vs.project(y)) continue;
-    const SineRatio now = vs.eval_both(y);
+    const SineRatio now = vs.eval_both(y, q_floor);  // stops at a tet below q_floor
     if (!(now.ratio > old.ratio)) continue;
     if (now.sine < q_floor) continue;
     if (!vs.acceptable(y)) continue;
