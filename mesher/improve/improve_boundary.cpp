@@ -31,7 +31,7 @@ bool face_on_surface(const double* a, const double* b, const double* c, const Bo
     double s[3];
     for (int q = 0; q < 3; ++q) s[q] = w[0] * a[q] + w[1] * b[q] + w[2] * c[q];
     const int near = int(std::max_element(w, w + 3) - w);
-    if (!(ctx.query->distance(s, corner[near]) <= limit)) return false;
+    if (!ctx.query->within(s, limit, corner[near])) return false;
   }
   double cp[3];
   std::uint32_t facet = kNoFacet;

@@ -301,6 +301,35 @@ class BoxGrid {
     const double sb = pl[4] * (std::fabs(b[0]) + std::fabs(b[1]) + std::fabs(b[2]) + pl[5]);
     return da > 0 ? db > sb : db < -sb;
   }
+  /// Whether the nearest facet is within r of p: 1 when one certainly is (its distance below
+  /// r by a relative 1e-9), 0 when none certainly is (no facet within r (1 + 1e-9) of p: the
+  /// facets listed in the cells of the box around p hold every facet point that near), -1
+  /// when a facet's distance is within those margins of r, or the box spans more than 64
+  /// cells: the caller decides with the tree then.
+  int within(const double* p, double r) const {
+    const double scale = std::fabs(p[0]) + std::fabs(p[1]) + std::fabs(p[2]);
+    const double lo_r = r * (1 - 1e-9), hi_r = r * (1 + 1e-9) + 1e-12 * (scale + magnitude_);
+    double a[3], b[3];
+    for (int k = 0; k < 3; ++k) a[k] = p[k] - hi_r, b[k] = p[k] + hi_r;
+    int verdict = 0;
+    const bool searched = facets_near(a, b, 64, [&](std::uint32_t f) {
+      if (verdict == 1) return;
+      const std::array<double, 6>& bx = boxes_[f];
+      double d2 = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double o = std::max({bx[k] - p[k], p[k] - bx[3 + k], 0.0});
+        d2 += o * o;
+      }
+      if (d2 > hi_r * hi_r) return;
+      const double* t = &corners_[9 * std::size_t(f)];
+      double q[3];
+      closest_on_triangle(p, t, t + 3, t + 6, q);
+      const double e2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
+      if (e2 <= lo_r * lo_r) verdict = 1;
+      else if (e2 <= hi_r * hi_r) verdict = -1;
+    });
+    return searched ? verdict : -1;
+  }
   /// Facet f's bounding box meets the closed box [a, b] (exact comparisons).
   bool box_meets(std::uint32_t facet, const double* a, const double* b) const {
     const std::array<double, 6>& f = boxes_[facet];
@@ -555,6 +584,22 @@ double SurfaceQuery::distance(const double* p) const {
   }
   const K::Point_3 q(p[0], p[1], p[2]);
   return std::sqrt(impl_->tree.squared_distance(q));
+}
+
+bool SurfaceQuery::within(const double* p, double r, const double* hint) const {
+  // distance(p, hint) <= r, decided by the facet grid wherever the margins allow: distance(p,
+  // hint) is min(|p - hint|, the distance), and both are compared with r by a relative 1e-9
+  // (far above the rounding of either computation) before the tree is asked.
+  if (std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]) && r >= 0 && std::isfinite(r)) {
+    const double ph = std::sqrt((p[0] - hint[0]) * (p[0] - hint[0]) + (p[1] - hint[1]) * (p[1] - hint[1]) +
+                                (p[2] - hint[2]) * (p[2] - hint[2]));
+    if (ph <= r * (1 - 1e-9)) return true;
+    if (ph > r * (1 + 1e-9) + 1e-12 * (std::fabs(hint[0]) + std::fabs(hint[1]) + std::fabs(hint[2]))) {
+      const int v = impl_->boxes.within(p, r);
+      if (v >= 0) return v == 1;
+    }
+  }
+  return distance(p, hint) <= r;
 }
 
 double SurfaceQuery::distance(const double* p, const double* hint) const {

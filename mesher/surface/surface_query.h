@@ -28,6 +28,9 @@ class SurfaceQuery {
   /// that bounds the search. The result is min(|p - hint|, the distance), so it may be low by
   /// at most hint's own distance from the surface.
   double distance(const double* p, const double* hint) const;
+  /// distance(p, hint) <= r, the same answer, from the facet grid where no rounding can
+  /// matter (the tree otherwise).
+  bool within(const double* p, double r, const double* hint) const;
   /// Distance from `origin` along the ray in direction `dir` (not necessarily unit) to its
   /// first crossing with a facet other than `skip` (kNoFacet: none skipped), in units of
   /// |dir|; +infinity when the ray meets no other facet. The facet hit goes to *hit (if not
