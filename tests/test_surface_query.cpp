@@ -104,6 +104,47 @@ double brute_distance(const SurfaceMesh& s, const double* x) {
   return best;
 }
 
+// The facet grid's queries hold at every magnitude too: a clear segment joins two points of
+// one side, a segment between the two sides is never clear, and the distance is the brute
+// force's. The grid's point-triangle arithmetic takes products of four coordinates, which
+// overflowed for a cube of side 2^300 and up: no facet was registered in any cell, so
+// segment_clear called segments across the surface clear (and, with the cells' sides kept
+// since, side() answered for the whole cube from one point). Beyond its scale range the grid
+// now leaves every query to the tree.
+TEST(SurfaceQuery, GridQueriesHoldAtEveryMagnitude) {
+  SurfaceMesh unit;
+  for (int i = 0; i < 8; ++i) unit.points.push_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+  const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads)
+    for (const std::uint32_t v : {q[0], q[1], q[2], q[0], q[2], q[3]}) unit.tris.push_back(v);
+  for (const int k : {-1000, -600, -300, -256, -200, -100, 0, 100, 200, 250, 256, 300, 600, 1000}) {
+    SurfaceMesh m = unit;
+    for (double& x : m.points.xyz) x = std::ldexp(x, k);
+    const SurfaceQuery q(m);
+    Rng rng(std::uint64_t(k + 2000));
+    int crossing = 0, clear = 0;
+    for (int i = 0; i < 400; ++i) {
+      double a[3], b[3];
+      for (int c = 0; c < 3; ++c) a[c] = std::ldexp(rng.uniform(-0.3, 1.3), k), b[c] = std::ldexp(rng.uniform(-0.3, 1.3), k);
+      const int sa = q.side(a), sb = q.side(b);
+      if (q.segment_clear(a, b)) {
+        ASSERT_TRUE(sa != 0 && sa == sb) << "2^" << k << " segment " << i;
+        ++clear;
+      }
+      if (sa * sb < 0) {
+        ASSERT_FALSE(q.segment_clear(a, b)) << "2^" << k << " segment " << i;
+        ++crossing;
+      }
+      if (k >= -250 && k <= 250) {  // (the brute force takes products of four coordinates too)
+        const double want = brute_distance(m, a);
+        ASSERT_NEAR(q.distance(a), want, 1e-12 * want) << "2^" << k << " point " << i;
+      }
+    }
+    EXPECT_GT(clear, 40) << "2^" << k;
+    EXPECT_GT(crossing, 40) << "2^" << k;
+  }
+}
+
 // distance() searches the facet box grid near the surface and the AABB tree farther away:
 // both must give the least point-facet distance, near, far, outside the bounding box, on
 // a sphere of small facets and on a slab of long thin ones (boxes spanning many cells).

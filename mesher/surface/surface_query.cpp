@@ -10,8 +10,10 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -229,6 +231,13 @@ class BoxGrid {
     for (int k = 0; k < 3; ++k)
       if (inv_[k] > 0) min_cell_ = std::min(min_cell_, 1 / inv_[k]);
     register_triangles(std::size_t(n_[0]) * n_[1] * n_[2]);
+    // The point-triangle distances of the registration and of nearest() take products of four
+    // coordinate differences: beyond 2^255 they overflow (a cube of side 2^300 registered no
+    // facet anywhere), below 2^-255 they vanish. Outside [2^-200, 2^200] the grid answers
+    // nothing and every query goes to the tree.
+    double extent = 0;
+    for (int k = 0; k < 3; ++k) extent = std::max(extent, hi_[k] - lo_[k]);
+    usable_ = magnitude_ <= 0x1p200 && extent >= 0x1p-200;
   }
 
   /// Each facet also in the cells its triangle comes near, not only its box: a long
@@ -273,6 +282,7 @@ class BoxGrid {
   /// `max_cells` cells.
   template <class F>
   bool facets_near(const double* a, const double* b, std::size_t max_cells, F&& f) const {
+    if (!usable_) return false;
     int ia[3], ib[3];
     std::size_t cells = 1;
     for (int k = 0; k < 3; ++k) {
@@ -307,6 +317,7 @@ class BoxGrid {
   /// when a facet's distance is within those margins of r, or the box spans more than 64
   /// cells: the caller decides with the tree then.
   int within(const double* p, double r) const {
+    if (!usable_) return -1;
     const double scale = std::fabs(p[0]) + std::fabs(p[1]) + std::fabs(p[2]);
     const double lo_r = r * (1 - 1e-9), hi_r = r * (1 + 1e-9) + 1e-12 * (scale + magnitude_);
     double a[3], b[3];
@@ -329,6 +340,21 @@ class BoxGrid {
       else if (e2 <= hi_r * hi_r) verdict = -1;
     });
     return searched ? verdict : -1;
+  }
+  /// The number of cells (the range of empty_cell's ids).
+  std::size_t cells() const { return tstart_.empty() ? 0 : tstart_.size() - 1; }
+  /// p's cell when p lies in the grid's box and its cell lists no facet, else cells(). No
+  /// facet comes within that cell's half diagonal (plus margins) of its centre, and p lies in
+  /// that ball whatever the rounding of its index (register_triangles): all points with this
+  /// cell id lie in one facet-free ball, so on one side of the surface, never on it.
+  std::size_t empty_cell(const double* p) const {
+    if (!usable_) return cells();
+    std::size_t c = 0;
+    for (int k = 2; k >= 0; --k) {
+      if (!(p[k] >= lo_[k] && p[k] <= hi_[k])) return cells();  // off the box, or NaN
+      c = c * std::size_t(n_[k]) + std::size_t(index(k, p[k]));
+    }
+    return tstart_[c] == tstart_[c + 1] ? c : cells();
   }
   /// Facet f's bounding box meets the closed box [a, b] (exact comparisons).
   bool box_meets(std::uint32_t facet, const double* a, const double* b) const {
@@ -354,6 +380,7 @@ class BoxGrid {
   /// that no rounding of either computation can close, so that CGAL's tree returns this
   /// facet too. The search then goes on while a facet may come within that margin.
   double nearest(const double* p, int max_ring, std::uint32_t* facet = nullptr, bool* unique = nullptr) const {
+    if (!usable_) return std::numeric_limits<double>::quiet_NaN();
     int c0[3];
     for (int k = 0; k < 3; ++k) c0[k] = index(k, p[k]);
     const double scale = std::fabs(p[0]) + std::fabs(p[1]) + std::fabs(p[2]);
@@ -457,6 +484,7 @@ class BoxGrid {
   int n_[3];
   double min_cell_ = 0;
   double magnitude_ = 0;  // largest |coordinate| of the facets
+  bool usable_ = false;   // the coordinates' scale allows the grid's arithmetic (build())
   std::vector<std::array<double, 6>> boxes_;
   std::vector<double> corners_;  // 3 x 3 coordinates per facet
   std::vector<double> planes_;   // per facet: unit normal, offset, rounding slack (2 terms)
@@ -468,6 +496,10 @@ struct SurfaceQuery::Impl {
   Tree tree;
   BoxGrid boxes;
   double magnitude = 0;  // largest |coordinate| of the surface
+  /// The side of each facet-free grid cell (BoxGrid::empty_cell), found by the first point
+  /// asked there: 0 not yet, else +1 / -1. Any point of the cell has that side, so the answer
+  /// does not depend on which point (or thread) came first.
+  std::unique_ptr<std::int8_t[]> cell_side;
 };
 
 SurfaceQuery::SurfaceQuery(const SurfaceMesh& surface) : impl_(std::make_unique<Impl>()) {
@@ -485,14 +517,25 @@ SurfaceQuery::SurfaceQuery(const SurfaceMesh& surface) : impl_(std::make_unique<
   impl_->tree.build();
   impl_->tree.accelerate_distance_queries();
   impl_->boxes.build(impl_->triangles);
+  impl_->cell_side.reset(new std::int8_t[impl_->boxes.cells()]());
   for (const double x : surface.points.xyz) impl_->magnitude = std::max(impl_->magnitude, std::fabs(x));
 }
 
 SurfaceQuery::~SurfaceQuery() = default;
 
 int SurfaceQuery::side(const double* p) const {
-  // Parity of a segment's crossings, exact at any magnitude: ray_parity::side above.
-  return ray_parity::side(impl_->tree, p);
+  // Parity of a segment's crossings, exact at any magnitude: ray_parity::side above. In a
+  // facet-free cell of the grid, once per cell (the gear box's assembly asked 3.7M interior
+  // nodes' bodies, most of them in such cells).
+  const std::size_t c = impl_->boxes.empty_cell(p);
+  if (c == impl_->boxes.cells()) return ray_parity::side(impl_->tree, p);
+  std::atomic_ref<std::int8_t> known(impl_->cell_side[c]);
+  int s = known.load(std::memory_order_relaxed);
+  if (s == 0) {
+    s = ray_parity::side(impl_->tree, p);
+    if (s != 0) known.store(std::int8_t(s), std::memory_order_relaxed);  // (never 0 here)
+  }
+  return s;
 }
 
 double SurfaceQuery::closest(const double* p, double* out, std::uint32_t* facet) const {
@@ -540,7 +583,8 @@ bool SurfaceQuery::segment_clear(const double* a, const double* b) const {
       meets = K().do_intersect_3_object()(seg, impl_->triangles[f]);
     }
   });
-  if (searched) return !meets;  // always for a point: its box spans one cell
+  if (searched) return !meets;  // always for a point, unless the grid is off (its scale)
+  if (point) return side(a) != 0;  // a point meets a closed facet iff it is on the surface
   return !impl_->tree.do_intersect(seg);
 }
 
