@@ -59,6 +59,16 @@ SurfaceMesh sphere(double r, int levels) {
   return s;
 }
 
+/// The cube [0, 1]^3, outward, two facets a side.
+SurfaceMesh unit_cube() {
+  SurfaceMesh unit;
+  for (int i = 0; i < 8; ++i) unit.points.push_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+  const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads)
+    for (const std::uint32_t v : {q[0], q[1], q[2], q[0], q[2], q[3]}) unit.tris.push_back(v);
+  return unit;
+}
+
 // The side of a point is exact at every magnitude. Points on a grid in a cube of side 2^k
 // include the centre and others whose vertical line meets the facets' diagonals, so the
 // inside test must fall back from the vertical direction to others. Up to issue 19 that
@@ -66,11 +76,7 @@ SurfaceMesh sphere(double r, int levels) {
 // direction is rounded away at coordinates of 2^52 and beyond: the cube's centre came out
 // "outside" from k = 52, and at k >= 54 every point on such a line did (see ray_parity.h).
 TEST(SurfaceQuery, SideIsExactAtEveryMagnitude) {
-  SurfaceMesh unit;
-  for (int i = 0; i < 8; ++i) unit.points.push_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
-  const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : quads)
-    for (const std::uint32_t v : {q[0], q[1], q[2], q[0], q[2], q[3]}) unit.tris.push_back(v);
+  const SurfaceMesh unit = unit_cube();
   constexpr int n = 8;  // grid steps per side: i / n is exact, on and off the diagonals
   // Every binade from near the smallest normal doubles to near the largest (the grid's
   // coordinates stay normal and finite), and each side of 2^52 and 2^53 closely.
@@ -112,11 +118,7 @@ double brute_distance(const SurfaceMesh& s, const double* x) {
 // since, side() answered for the whole cube from one point). Beyond its scale range the grid
 // now leaves every query to the tree.
 TEST(SurfaceQuery, GridQueriesHoldAtEveryMagnitude) {
-  SurfaceMesh unit;
-  for (int i = 0; i < 8; ++i) unit.points.push_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
-  const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : quads)
-    for (const std::uint32_t v : {q[0], q[1], q[2], q[0], q[2], q[3]}) unit.tris.push_back(v);
+  const SurfaceMesh unit = unit_cube();
   for (const int k : {-1000, -600, -300, -256, -200, -100, 0, 100, 200, 250, 256, 300, 600, 1000}) {
     SurfaceMesh m = unit;
     for (double& x : m.points.xyz) x = std::ldexp(x, k);
