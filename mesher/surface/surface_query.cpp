@@ -542,10 +542,11 @@ double SurfaceQuery::closest(const double* p, double* out, std::uint32_t* facet)
   const K::Point_3 q(p[0], p[1], p[2]);
   // Near the surface the facet grid finds the nearest facet (CGAL's tree took 0.3 s of CPU
   // in pinion.ply's boundary judgement alone). Where it is nearer than every other facet by a
-  // margin, the tree would return it too (a nearer point strictly replaces its best); the
-  // point is then the tree's own construction on that facet, so the answer is the tree's, bit
-  // for bit. Near ties (a point nearest to an edge or a corner of the surface, where the tree's
-  // choice among the facets depends on its traversal) are the tree's.
+  // margin, the tree returns it too (its traversal keeps the point found last among those not
+  // farther than its best, so only a tie could displace it); the point is then the tree's own
+  // construction on that facet, so the answer is the tree's, bit for bit. Near ties (a point
+  // nearest to an edge or a corner of the surface, where the tree's choice among the facets
+  // depends on its traversal) are the tree's.
   if (std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2])) {
     std::uint32_t f = 0;
     bool unique = false;
