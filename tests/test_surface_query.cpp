@@ -101,6 +101,58 @@ TEST(SurfaceQuery, SideIsExactAtEveryMagnitude) {
   }
 }
 
+// side() answers a point in a cell that lists facets from the cell's centre when the segment
+// between them is clear, and from the long parity segment otherwise. A hollow cube with walls
+// 1/64 thick (much thinner than a cell) puts wall, cavity and outside in the same cells, so
+// many points have a centre on the other side of a wall; points on the walls, one ulp off them
+// and anywhere else are compared with the exact answer, which coordinate comparisons give
+// here. Two queries answer the points in opposite orders: the cells' cached sides must not
+// matter. Taking the centre's side without the segment test fails this.
+TEST(SurfaceQuery, SideInCellsWithFacetsIsExact) {
+  SurfaceMesh s = unit_cube();
+  const double a = 1.0 / 64, b = 1 - a;
+  SurfaceMesh inner = unit_cube();
+  for (double& x : inner.points.xyz) x = x == 0 ? a : b;
+  for (std::size_t f = 0; f < inner.num_tris(); ++f) std::swap(inner.tris[3 * f + 1], inner.tris[3 * f + 2]);  // inward
+  const std::uint32_t base = std::uint32_t(s.points.size());
+  for (std::size_t v = 0; v < inner.points.size(); ++v) s.points.push_back(inner.points.p(std::uint32_t(v))[0],
+                                                                          inner.points.p(std::uint32_t(v))[1],
+                                                                          inner.points.p(std::uint32_t(v))[2]);
+  for (const std::uint32_t v : inner.tris) s.tris.push_back(base + v);
+  auto exact = [&](const double* p) {
+    const auto all = [&](auto in) { return in(p[0]) && in(p[1]) && in(p[2]); };
+    if (!all([](double x) { return x >= 0 && x <= 1; })) return -1;
+    if (!all([](double x) { return x > 0 && x < 1; })) return 0;  // on the outer walls
+    if (all([&](double x) { return x > a && x < b; })) return -1;  // in the cavity
+    return all([&](double x) { return x >= a && x <= b; }) ? 0 : 1;  // on the inner walls, or in a wall
+  };
+  std::vector<std::array<double, 3>> points;
+  Rng rng(17);
+  const double marks[] = {0, a, b, 1};  // the walls' planes
+  for (int i = 0; i < 60000; ++i) {
+    std::array<double, 3> p;
+    for (double& x : p) {
+      const int kind = int(rng.uniform(0, 4));
+      const double m = marks[int(rng.uniform(0, 4)) & 3];
+      x = kind == 0 ? m : kind == 1 ? std::nextafter(m, rng.uniform(0, 1) < 0.5 ? -1.0 : 2.0)
+        : kind == 2 ? m + rng.uniform(-a, a) : rng.uniform(-0.1, 1.1);
+    }
+    points.push_back(p);
+  }
+  const SurfaceQuery forward(s), backward(s);
+  int counts[3] = {0, 0, 0};
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const int want = exact(points[i].data());
+    ASSERT_EQ(forward.side(points[i].data()), want) << "point " << i;
+    ++counts[want + 1];
+  }
+  for (std::size_t i = points.size(); i-- > 0;)
+    ASSERT_EQ(backward.side(points[i].data()), exact(points[i].data())) << "point " << i;
+  EXPECT_GT(counts[0], 5000);  // outside or in the cavity
+  EXPECT_GT(counts[1], 5000);  // on a wall
+  EXPECT_GT(counts[2], 5000);  // in a wall
+}
+
 /// Brute force: the least distance from x to any facet of s.
 double brute_distance(const SurfaceMesh& s, const double* x) {
   double best = std::numeric_limits<double>::infinity();
