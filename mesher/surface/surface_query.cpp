@@ -247,14 +247,13 @@ class BoxGrid {
   /// distance and of a point's cell index): every facet that has a point in a cell, or at a
   /// point whose computed cell index is that cell, is in its list.
   void register_triangles(std::size_t cells) {
-    double size[3], magnitude = 0, big = 0;
+    double size[3], big = 0;
     for (int k = 0; k < 3; ++k) {
       size[k] = inv_[k] > 0 ? 1 / inv_[k] : 0;
       big = std::max(big, size[k]);
-      magnitude = std::max({magnitude, std::fabs(lo_[k]), std::fabs(hi_[k])});
     }
     const double reach =
-        0.5 * std::sqrt(size[0] * size[0] + size[1] * size[1] + size[2] * size[2]) + 1e-6 * big + 1e-13 * magnitude;
+        0.5 * std::sqrt(size[0] * size[0] + size[1] * size[1] + size[2] * size[2]) + 1e-6 * big + 1e-13 * magnitude_;
     std::vector<std::uint32_t> count(cells + 1, 0);
     auto each_cell = [&](std::uint32_t f, auto&& g) {
       const std::array<double, 6>& b = boxes_[f];
@@ -325,13 +324,7 @@ class BoxGrid {
     int verdict = 0;
     const bool searched = facets_near(a, b, 64, [&](std::uint32_t f) {
       if (verdict == 1) return;
-      const std::array<double, 6>& bx = boxes_[f];
-      double d2 = 0;
-      for (int k = 0; k < 3; ++k) {
-        const double o = std::max({bx[k] - p[k], p[k] - bx[3 + k], 0.0});
-        d2 += o * o;
-      }
-      if (d2 > hi_r * hi_r) return;
+      if (box_d2(f, p) > hi_r * hi_r) return;
       const double* t = &corners_[9 * std::size_t(f)];
       double q[3];
       closest_on_triangle(p, t, t + 3, t + 6, q);
@@ -368,6 +361,18 @@ class BoxGrid {
       c /= std::size_t(n_[k]);
       out[k] = inv_[k] > 0 ? std::min(hi_[k], lo_[k] + (double(i) + 0.5) / inv_[k]) : lo_[k];
     }
+  }
+  /// The largest |coordinate| of the facets.
+  double magnitude() const { return magnitude_; }
+  /// The squared distance from p to facet f's bounding box: a lower bound of its distance.
+  double box_d2(std::uint32_t facet, const double* p) const {
+    const std::array<double, 6>& bx = boxes_[facet];
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double o = std::max({bx[k] - p[k], p[k] - bx[3 + k], 0.0});
+      d2 += o * o;
+    }
+    return d2;
   }
   /// Facet f's bounding box meets the closed box [a, b] (exact comparisons).
   bool box_meets(std::uint32_t facet, const double* a, const double* b) const {
@@ -430,12 +435,7 @@ class BoxGrid {
     auto scan = [&](std::size_t c) {
       for (std::uint32_t x = tstart_[c]; x < tstart_[c + 1]; ++x) {
         const std::uint32_t f = titems_[x];
-        const std::array<double, 6>& bx = boxes_[f];
-        double d2 = 0;
-        for (int k = 0; k < 3; ++k) {
-          const double o = std::max({bx[k] - p[k], p[k] - bx[3 + k], 0.0});
-          d2 += o * o;
-        }
+        double d2 = box_d2(f, p);
         const double* pl = &planes_[6 * std::size_t(f)];
         const double dp = std::fabs(pl[0] * p[0] + pl[1] * p[1] + pl[2] * p[2] - pl[3]) - pl[4] * (scale + pl[5]);
         if (dp > 0) d2 = std::max(d2, dp * dp);
@@ -508,7 +508,6 @@ struct SurfaceQuery::Impl {
   Triangles triangles;
   Tree tree;
   BoxGrid boxes;
-  double magnitude = 0;  // largest |coordinate| of the surface
   /// Per grid cell, 0 until first asked, then:
   ///  - a facet-free cell (BoxGrid::empty_cell): its side, +1 / -1, found by the first point
   ///    asked there. Any point of the cell has that side, so the answer does not depend on
@@ -535,7 +534,6 @@ SurfaceQuery::SurfaceQuery(const SurfaceMesh& surface) : impl_(std::make_unique<
   impl_->tree.accelerate_distance_queries();
   impl_->boxes.build(impl_->triangles);
   impl_->cell_side.reset(new std::int8_t[impl_->boxes.cells()]());
-  for (const double x : surface.points.xyz) impl_->magnitude = std::max(impl_->magnitude, std::fabs(x));
 }
 
 SurfaceQuery::~SurfaceQuery() = default;
@@ -635,7 +633,7 @@ double SurfaceQuery::ray_distance(const double* origin, const double* dir, std::
   // its direction to a relative 2^-52 at every scale.
   const double dmax = std::max({std::fabs(dir[0]), std::fabs(dir[1]), std::fabs(dir[2])});
   if (!(dmax > 0) || !std::isfinite(dmax)) return std::numeric_limits<double>::infinity();
-  const double reach = std::max({impl_->magnitude, std::fabs(origin[0]), std::fabs(origin[1]), std::fabs(origin[2])});
+  const double reach = std::max({impl_->boxes.magnitude(), std::fabs(origin[0]), std::fabs(origin[1]), std::fabs(origin[2])});
   const int shift = reach > 0 ? std::ilogb(reach) + 1 - std::ilogb(dmax) : 0;
   const K::Vector_3 d(std::ldexp(dir[0], shift), std::ldexp(dir[1], shift), std::ldexp(dir[2], shift));
   const double dd = d.squared_length();
