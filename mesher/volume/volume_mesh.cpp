@@ -185,6 +185,28 @@ std::vector<std::uint8_t> classify(const Triangulation& tri, const NodeSet& node
   return inside;
 }
 
+/// Directed edges (link[2k], link[2k+1]) form one cycle: each vertex starts exactly one edge
+/// and ends exactly one, and walking from the first edge visits them all.
+bool one_cycle(const std::vector<std::uint32_t>& link) {
+  const std::size_t m = link.size() / 2;
+  for (std::size_t a = 0; a < m; ++a) {
+    int starts = 0, ends = 0;
+    for (std::size_t b = 0; b < m; ++b) {
+      starts += link[2 * b] == link[2 * a];
+      ends += link[2 * b + 1] == link[2 * a];
+    }
+    if (starts != 1 || ends != 1) return false;
+  }
+  std::size_t steps = 0, e = 0;
+  do {
+    std::size_t b = 0;
+    while (link[2 * b] != link[2 * e + 1]) ++b;
+    e = b;
+    ++steps;
+  } while (e != 0 && steps <= m);
+  return steps == m;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Folds. A tet whose four vertices are surface nodes is classified by the side of its centroid
 // alone. Where the surface bends or wiggles within one node spacing (the saddle-shaped inner
@@ -269,25 +291,7 @@ std::size_t peel_folds(const Triangulation& tri, const NodeSet& nodes, const Dom
       link.push_back(fv[(j + 1) % 3]);  // directed link edge
       link.push_back(fv[(j + 2) % 3]);
     }
-    // One cycle: each link vertex starts exactly one edge and ends exactly one, and walking
-    // from the first edge visits them all.
-    const std::size_t m = link.size() / 2;
-    for (std::size_t a = 0; a < m; ++a) {
-      int starts = 0, ends = 0;
-      for (std::size_t b = 0; b < m; ++b) {
-        starts += link[2 * b] == link[2 * a];
-        ends += link[2 * b + 1] == link[2 * a];
-      }
-      if (starts != 1 || ends != 1) return false;
-    }
-    std::size_t steps = 0, e = 0;
-    do {
-      std::size_t b = 0;
-      while (link[2 * b] != link[2 * e + 1]) ++b;
-      e = b;
-      ++steps;
-    } while (e != 0 && steps <= m);
-    return steps == m;
+    return one_cycle(link);
   };
   auto peel_one = [&](std::uint32_t t, int d) {  // d = -1 peel, +1 undo
     for (int i = 0; i < 4; ++i) {

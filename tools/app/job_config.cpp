@@ -422,6 +422,16 @@ class Loader {
         fail(e.at("min_size").value, key("min_size") + ": must not exceed 'size'");
     }
     if (e.count("gradation")) job.sizing.gradation = positive(e.at("gradation").value, key("gradation"));
+    sizing_keys(e, job);
+    run_keys(e, job);
+    output_keys(e, job);
+    return job;
+  }
+
+  /// A job's keys of the surface, the sizing field and the checks' tolerances (job()).
+  void sizing_keys(const std::map<std::string, Entry>& e, MeshJob& job) const {
+    const std::string where = "job '" + job.name + "'";
+    auto key = [&](const std::string& k) { return where + ": key '" + k + "'"; };
     if (e.count("sharp_angle")) {
       const YAML::Node v = e.at("sharp_angle").value;
       job.sharp_angle = number(v, key("sharp_angle"));
@@ -483,6 +493,12 @@ class Loader {
       for (std::size_t i = 0; i < z.size(); ++i)
         job.sizing.zones.push_back(zone(z[i], where + ": zones[" + std::to_string(i) + "]"));
     }
+  }
+
+  /// A job's keys of the run: order, seed, checks, groups, limits, repairs (job()).
+  void run_keys(const std::map<std::string, Entry>& e, MeshJob& job) const {
+    const std::string where = "job '" + job.name + "'";
+    auto key = [&](const std::string& k) { return where + ": key '" + k + "'"; };
     if (e.count("order")) {
       const YAML::Node v = e.at("order").value;
       const std::string name = string(v, key("order"));
@@ -560,6 +576,12 @@ class Loader {
         fail(v, err.what());
       }
     }
+  }
+
+  /// A job's output files (job()).
+  void output_keys(const std::map<std::string, Entry>& e, MeshJob& job) const {
+    const std::string where = "job '" + job.name + "'";
+    auto key = [&](const std::string& k) { return where + ": key '" + k + "'"; };
     if (e.count("output")) {
       const auto o = entries(e.at("output").value, kOutputKeys, key("output"));
       const std::string k = key("output");
@@ -574,7 +596,6 @@ class Loader {
       if (o.count("xdmf")) job.xdmf = resolve_output(o.at("xdmf").value, k + ": key 'xdmf'");
       if (o.count("exodus")) job.exodus = resolve_output(o.at("exodus").value, k + ": key 'exodus'");
     }
-    return job;
   }
 
   BatchConfig load(const YAML::Node& root) const {

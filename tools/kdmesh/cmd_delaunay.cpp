@@ -69,6 +69,81 @@ nlohmann::json run_checks(const Options& o, const PointSet& pts, const Triangula
   return std::move(r.json);
 }
 
+/// The kdmesh kernel's counts (returned), its walk histogram and duplicates (into j), and the
+/// first duplicates for the reader.
+nlohmann::json kernel_counts(const DelaunayStats& st, const Output& out, nlohmann::json& j) {
+  const double k = double(std::max<std::uint64_t>(st.inserted, 1));
+  const nlohmann::json counts = {{"inserted", st.inserted},
+                                 {"threads", st.threads},
+                                 {"duplicates", st.duplicates.size()},
+                                 {"orient_tests_per_point", double(st.orient_tests) / k},
+                                 {"conflicts_per_point", double(st.conflicts) / k},
+                                 {"exact_fallbacks", st.exact_fallbacks},
+                                 {"parallel_rounds", st.parallel_rounds},
+                                 {"deferrals", st.deferrals}};
+  // The walks by orientation tests (DelaunayStats::walks): bins [lo, hi], hi null for the
+  // open last bin.
+  nlohmann::json bins = nlohmann::json::array();
+  for (std::size_t b = 0; b < kWalkBins; ++b) {
+    const std::uint64_t lo = b == 0 ? 0 : std::uint64_t(1) << (b - 1);
+    const nlohmann::json hi = b == 0 ? nlohmann::json(0)
+                              : b + 1 == kWalkBins ? nlohmann::json(nullptr)
+                                                  : nlohmann::json((std::uint64_t(1) << b) - 1);
+    bins.push_back({{"tests_min", lo}, {"tests_max", hi}, {"walks", st.walks[b]},
+                    {"tests", st.walk_tests[b]}});
+  }
+  j["walk_histogram"] = bins;
+  for (std::size_t i = 0; i < st.duplicates.size(); ++i) {
+    if (i == 10) {
+      out.human() << "  ... " << st.duplicates.size() - 10 << " more duplicates\n";
+      break;
+    }
+    out.human() << "  duplicate: point " << st.duplicates[i] << " repeats point "
+                << st.duplicate_of[i] << " (skipped)\n";
+  }
+  j["duplicates"] = nlohmann::json::array();
+  for (std::size_t i = 0; i < std::min<std::size_t>(st.duplicates.size(), 1000); ++i)
+    j["duplicates"].push_back({st.duplicates[i], st.duplicate_of[i]});
+  return counts;
+}
+
+/// The run's counts for the reader: tets, tests per point, the walks' tail, parallel rounds.
+void print_counts(const Output& out, const nlohmann::json& counts, const nlohmann::json& j,
+                  std::size_t n, std::size_t num_tets, const Options& o) {
+  out.human() << "delaunay: " << n << " points, " << num_tets << " tets, kernel " << o.kernel
+              << ", order " << o.order << "\n";
+  if (counts.contains("orient_tests_per_point")) {
+    out.human() << "  orientation tests per point " << std::setprecision(4)
+                << counts["orient_tests_per_point"].get<double>() << ", conflicts per point "
+                << counts["conflicts_per_point"].get<double>();
+    if (counts.contains("exact_fallbacks"))
+      out.human() << ", exact fallbacks " << counts["exact_fallbacks"].get<std::uint64_t>();
+    out.human() << "\n";
+  }
+  if (j.contains("walk_histogram")) {
+    // The tail a mean hides: walks of 64 tests or more (bins 7 and up).
+    double walks = 0, tests = 0, long_walks = 0, long_tests = 0;
+    for (std::size_t b = 0; b < kWalkBins; ++b) {
+      const double w = j["walk_histogram"][b]["walks"].get<double>();
+      const double t = j["walk_histogram"][b]["tests"].get<double>();
+      walks += w;
+      tests += t;
+      if (b >= 7) {
+        long_walks += w;
+        long_tests += t;
+      }
+    }
+    if (walks > 0 && tests > 0)
+      out.human() << "  walks of 64+ orientation tests: " << std::setprecision(3)
+                  << 100 * long_walks / walks << "% of the walks, " << 100 * long_tests / tests
+                  << "% of the tests\n";
+  }
+  if (counts.value("parallel_rounds", 0u) > 0)
+    out.human() << "  parallel: " << counts["parallel_rounds"].get<unsigned>() << " rounds on "
+                << counts["threads"].get<unsigned>() << " threads, " << counts["deferrals"].get<std::uint64_t>()
+                << " points deferred to a later round\n";
+}
+
 int run_delaunay(const Options& o) {
   const Output& out = o.out;
   Stopwatch total, clock;
@@ -114,38 +189,7 @@ int run_delaunay(const Options& o) {
     opt.threads = o.threads;
     DelaunayResult r = delaunay(pts, ord, opt);
     tri = std::move(r.tri);
-    const double k = double(std::max<std::uint64_t>(r.stats.inserted, 1));
-    counts = {{"inserted", r.stats.inserted},
-              {"threads", r.stats.threads},
-              {"duplicates", r.stats.duplicates.size()},
-              {"orient_tests_per_point", double(r.stats.orient_tests) / k},
-              {"conflicts_per_point", double(r.stats.conflicts) / k},
-              {"exact_fallbacks", r.stats.exact_fallbacks},
-              {"parallel_rounds", r.stats.parallel_rounds},
-              {"deferrals", r.stats.deferrals}};
-    // The walks by orientation tests (DelaunayStats::walks): bins [lo, hi], hi null for the
-    // open last bin.
-    nlohmann::json bins = nlohmann::json::array();
-    for (std::size_t b = 0; b < kWalkBins; ++b) {
-      const std::uint64_t lo = b == 0 ? 0 : std::uint64_t(1) << (b - 1);
-      const nlohmann::json hi = b == 0 ? nlohmann::json(0)
-                                : b + 1 == kWalkBins ? nlohmann::json(nullptr)
-                                                    : nlohmann::json((std::uint64_t(1) << b) - 1);
-      bins.push_back({{"tests_min", lo}, {"tests_max", hi}, {"walks", r.stats.walks[b]},
-                      {"tests", r.stats.walk_tests[b]}});
-    }
-    j["walk_histogram"] = bins;
-    for (std::size_t i = 0; i < r.stats.duplicates.size(); ++i) {
-      if (i == 10) {
-        out.human() << "  ... " << r.stats.duplicates.size() - 10 << " more duplicates\n";
-        break;
-      }
-      out.human() << "  duplicate: point " << r.stats.duplicates[i] << " repeats point "
-                  << r.stats.duplicate_of[i] << " (skipped)\n";
-    }
-    j["duplicates"] = nlohmann::json::array();
-    for (std::size_t i = 0; i < std::min<std::size_t>(r.stats.duplicates.size(), 1000); ++i)
-      j["duplicates"].push_back({r.stats.duplicates[i], r.stats.duplicate_of[i]});
+    counts = kernel_counts(r.stats, out, j);
   } else {
     CgalOptions co;
     co.count = o.count;
@@ -175,38 +219,7 @@ int run_delaunay(const Options& o) {
   if (num_tets == 0)
     throw GeometryError("no tetrahedra: the points span no volume (coplanar or fewer than 4)");
 
-  out.human() << "delaunay: " << n << " points, " << num_tets << " tets, kernel " << o.kernel
-              << ", order " << o.order << "\n";
-  if (counts.contains("orient_tests_per_point")) {
-    out.human() << "  orientation tests per point " << std::setprecision(4)
-                << counts["orient_tests_per_point"].get<double>() << ", conflicts per point "
-                << counts["conflicts_per_point"].get<double>();
-    if (counts.contains("exact_fallbacks"))
-      out.human() << ", exact fallbacks " << counts["exact_fallbacks"].get<std::uint64_t>();
-    out.human() << "\n";
-  }
-  if (j.contains("walk_histogram")) {
-    // The tail a mean hides: walks of 64 tests or more (bins 7 and up).
-    double walks = 0, tests = 0, long_walks = 0, long_tests = 0;
-    for (std::size_t b = 0; b < kWalkBins; ++b) {
-      const double w = j["walk_histogram"][b]["walks"].get<double>();
-      const double t = j["walk_histogram"][b]["tests"].get<double>();
-      walks += w;
-      tests += t;
-      if (b >= 7) {
-        long_walks += w;
-        long_tests += t;
-      }
-    }
-    if (walks > 0 && tests > 0)
-      out.human() << "  walks of 64+ orientation tests: " << std::setprecision(3)
-                  << 100 * long_walks / walks << "% of the walks, " << 100 * long_tests / tests
-                  << "% of the tests\n";
-  }
-  if (counts.value("parallel_rounds", 0u) > 0)
-    out.human() << "  parallel: " << counts["parallel_rounds"].get<unsigned>() << " rounds on "
-                << counts["threads"].get<unsigned>() << " threads, " << counts["deferrals"].get<std::uint64_t>()
-                << " points deferred to a later round\n";
+  print_counts(out, counts, j, n, num_tets, o);
   out.human() << std::setprecision(4) << "  time: read " << t_read << " s, order " << t_order
               << " s, delaunay " << t_del << " s\n";
 

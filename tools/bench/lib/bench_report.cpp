@@ -230,19 +230,192 @@ void write_bench_csv(const std::vector<BenchRecord>& records, const std::string&
   file.commit();
 }
 
-void write_bench_tables(const std::vector<BenchRecord>& records, const BenchReportInfo& info,
-                        const std::string& path) {
+namespace {
+
+/// What the tables are made of: the records by (distribution, size, kernel, order), and the
+/// sizes and series run per distribution.
+struct TableData {
   Index idx;
   std::map<std::string, std::set<std::size_t>> sizes;  // per distribution, Tables 1-14
   std::map<std::string, std::set<Series>> series;      // per distribution
   std::set<std::size_t> order_sizes;
+};
+
+/// Tables 1-7: time.
+void time_tables(std::ostringstream& md, const TableData& t) {
+  // ---- Tables 1-7: time ----
+  md << "## Tables 1-7: time in seconds (order building + Delaunay)\n\n";
+  for (const paper::TimeTable& pt : paper::kTimes) {
+    const std::string d = pt.dist;
+    if (!t.sizes.count(d)) continue;
+    md << "### Table " << pt.number << " " << capitalised(d) << ", time in seconds\n\n";
+    const bool with_paper = overlaps(t.sizes.at(d), pt.sizes);
+    std::vector<std::string> head = {"Datasize"};
+    for (const Series& s : t.series.at(d)) head.push_back(s.label());
+    if (with_paper)
+      for (const char* p : {"Kd-tree", "BRIO", "Hilbert"}) head.push_back(std::string("paper ") + p);
+    md << md_row(head) << md_rule(head.size());
+    for (std::size_t n : t.sizes.at(d)) {
+      std::vector<std::string> row = {size_str(n)};
+      for (const Series& s : t.series.at(d)) {
+        const BenchRecord* r = t.idx.find(d, n, s);
+        row.push_back(!r ? "" : r->status == "ok" ? sig3(r->total_seconds) : status_cell(*r));
+      }
+      const auto it = std::find(pt.sizes.begin(), pt.sizes.end(), n);
+      for (int k = 0; with_paper && k < 3; ++k)
+        row.push_back(it == pt.sizes.end() ? "" : fixed(pt.seconds[std::size_t(it - pt.sizes.begin())][k], 0));
+      md << md_row(row);
+    }
+    md << "\n";
+    if (!with_paper) md << no_overlap_note(pt.sizes) << "\n";
+  }
+}
+
+/// Tables 8-14: orientation tests and conflicts per point.
+void count_tables(std::ostringstream& md, const TableData& t) {
+  // ---- Tables 8-14: counts ----
+  md << "## Tables 8-14: orientation tests and conflicting tets per point\n\n";
+  for (const paper::CountTable& pt : paper::kCounts) {
+    const std::string d = pt.dist;
+    if (!t.sizes.count(d)) continue;
+    md << "### Table " << pt.number << " " << capitalised(d)
+       << ": the number of orientation tests and conflicting elements per point\n\n";
+    std::vector<std::string> head = {"Data size", ""};
+    for (std::size_t n : t.sizes.at(d)) head.push_back(size_str(n));
+    md << md_row(head) << md_rule(head.size(), 2);
+    for (const Series& s : t.series.at(d)) {
+      if (s.kernel == "tetgen" || s.kernel == "cgal-plain") continue;  // not instrumented
+      for (int what = 0; what < 2; ++what) {
+        std::vector<std::string> row = {what == 0 ? s.label() : "", what == 0 ? "Orientation" : "Conflicts"};
+        for (std::size_t n : t.sizes.at(d)) {
+          const BenchRecord* r = t.idx.find(d, n, s);
+          if (!r) row.push_back("");
+          else if (r->status != "ok") row.push_back(status_cell(*r));
+          else row.push_back(fixed(what == 0 ? r->orient_per_point : r->conflicts_per_point, 3));
+        }
+        md << md_row(row);
+      }
+    }
+    const char* names[3] = {"paper Kd-tree", "paper BRIO", "paper Hilbert"};
+    const bool with_paper = overlaps(t.sizes.at(d), pt.sizes);
+    for (int k = 0; with_paper && k < 3; ++k) {
+      for (int what = 0; what < 2; ++what) {
+        std::vector<std::string> row = {what == 0 ? names[k] : "", what == 0 ? "Orientation" : "Conflicts"};
+        for (std::size_t n : t.sizes.at(d)) {
+          const auto it = std::find(pt.sizes.begin(), pt.sizes.end(), n);
+          const std::size_t j = std::size_t(it - pt.sizes.begin());
+          row.push_back(it == pt.sizes.end() ? ""
+                                             : fixed(what == 0 ? pt.orient[k][j] : pt.conflicts[k][j], 3));
+        }
+        md << md_row(row);
+      }
+    }
+    if (!with_paper) md << "\n" << no_overlap_note(pt.sizes);
+    else if (*pt.note) md << "\nPaper: " << pt.note << ".\n";
+    md << "\n";
+  }
+}
+
+/// Table 15: order building.
+void order_table(std::ostringstream& md, const TableData& t) {
+  // ---- Table 15: order building ----
+  md << "## Table 15: order building time in seconds, kd-tree (kd-bfs) and Hilbert orders\n\n"
+        "(and kd-bfs-hilbert, not in the paper)\n\n";
+  if (t.order_sizes.empty()) {
+    md << "Not run (needs the cube or the cylinder distribution).\n\n";
+  } else {
+    md << "Building the order alone (`order-only` runs; kdmesh builds the kd-tree's two halves below "
+          "the root on two threads for large inputs).\n\n";
+    const paper::OrderTable& pt = paper::kOrderBuild;
+    const bool with_paper = overlaps(t.order_sizes, pt.sizes);
+    std::vector<std::string> head = {"Datasize",         "cube kd-bfs",      "cube hilbert",
+                                     "cube kd-bfs-hilbert", "cylinder kd-bfs", "cylinder hilbert",
+                                     "cylinder kd-bfs-hilbert"};
+    if (with_paper)
+      for (const char* h : {"paper cube Kd-tree", "paper cube Hilbert", "paper cylinder Kd-tree",
+                            "paper cylinder Hilbert"})
+        head.push_back(h);
+    md << md_row(head) << md_rule(head.size());
+    for (std::size_t n : t.order_sizes) {
+      std::vector<std::string> row = {size_str(n)};
+      for (const char* d : {"cube", "cylinder"}) {
+        for (const char* o : {"kd-bfs", "hilbert", "kd-bfs-hilbert"}) {
+          const BenchRecord* r = t.idx.find(d, n, {"order-only", o});
+          row.push_back(!r ? "" : r->status == "ok" ? sig3(r->order_seconds) : status_cell(*r));
+        }
+      }
+      const auto it = std::find(pt.sizes.begin(), pt.sizes.end(), n);
+      const std::size_t j = std::size_t(it - pt.sizes.begin());
+      for (const auto* col : {&pt.cube_kd, &pt.cube_hilbert, &pt.cylinder_kd, &pt.cylinder_hilbert})
+        if (with_paper) row.push_back(it == pt.sizes.end() ? "" : fixed((*col)[j], 0));
+      md << md_row(row);
+    }
+    md << "\n";
+    if (!with_paper) md << no_overlap_note(pt.sizes) << "\n";
+  }
+}
+
+/// Peak memory per point, and CGAL's other counts (not in the paper).
+void memory_tables(std::ostringstream& md, const TableData& t) {
+  // ---- memory and CGAL's other counts (not in the paper) ----
+  std::set<Series> all_series;
+  for (const auto& [d, ss] : t.series) all_series.insert(ss.begin(), ss.end());
+  md << "## Peak memory, bytes per point (not in the paper)\n\n"
+        "(peak RSS - idle child) / n; the points (24 B) and the order are included.\n\n";
+  {
+    std::vector<std::string> head = {"Distribution", "Datasize"};
+    for (const Series& s : all_series) head.push_back(s.label());
+    md << md_row(head) << md_rule(head.size(), 2);
+    for (const paper::TimeTable& pt : paper::kTimes) {
+      if (!t.sizes.count(pt.dist)) continue;
+      for (std::size_t n : t.sizes.at(pt.dist)) {
+        std::vector<std::string> row = {pt.dist, size_str(n)};
+        for (const Series& s : all_series) {
+          const BenchRecord* r = t.idx.find(pt.dist, n, s);
+          row.push_back(!r ? "" : r->status == "ok" ? fixed(r->bytes_per_point, 0) : status_cell(*r));
+        }
+        md << md_row(row);
+      }
+    }
+    md << "\n";
+  }
+  md << "## CGAL's other counts per point (not in the paper)\n\n"
+        "All `Orientation_3` calls / `Side_of_oriented_sphere_3` calls, per point.\n\n";
+  {
+    std::vector<Series> cg;
+    for (const Series& s : all_series)
+      if (s.kernel == "cgal") cg.push_back(s);
+    std::vector<std::string> head = {"Distribution", "Datasize"};
+    for (const Series& s : cg) head.push_back(s.label());
+    md << md_row(head) << md_rule(head.size(), 2);
+    for (const paper::TimeTable& pt : paper::kTimes) {
+      if (!t.sizes.count(pt.dist)) continue;
+      for (std::size_t n : t.sizes.at(pt.dist)) {
+        std::vector<std::string> row = {pt.dist, size_str(n)};
+        for (const Series& s : cg) {
+          const BenchRecord* r = t.idx.find(pt.dist, n, s);
+          row.push_back(!r ? "" : r->status != "ok" ? status_cell(*r)
+                                : fixed(r->orient_all_per_point, 1) + " / " + fixed(r->sphere_tests_per_point, 1));
+        }
+        md << md_row(row);
+      }
+    }
+    md << "\n";
+  }
+}
+
+}  // namespace
+
+void write_bench_tables(const std::vector<BenchRecord>& records, const BenchReportInfo& info,
+                        const std::string& path) {
+  TableData t;
   for (const BenchRecord& r : records) {
-    idx.by_key[{r.dist, r.n, r.kernel, r.order}] = &r;
+    t.idx.by_key[{r.dist, r.n, r.kernel, r.order}] = &r;
     if (is_run(r)) {
-      sizes[r.dist].insert(r.n);
-      series[r.dist].insert({r.kernel, r.order});
+      t.sizes[r.dist].insert(r.n);
+      t.series[r.dist].insert({r.kernel, r.order});
     } else {
-      order_sizes.insert(r.n);
+      t.order_sizes.insert(r.n);
     }
   }
   std::ostringstream md;
@@ -261,156 +434,10 @@ void write_bench_tables(const std::vector<BenchRecord>& records, const BenchRepo
      << "`: the paper's numbers where it ran the same size. Its Kd-tree and BRIO columns\n"
         "  compare with `cgal kd-bfs` and `cgal brio`, its Hilbert column with `cgal range`.\n\n";
 
-  // ---- Tables 1-7: time ----
-  md << "## Tables 1-7: time in seconds (order building + Delaunay)\n\n";
-  for (const paper::TimeTable& pt : paper::kTimes) {
-    const std::string d = pt.dist;
-    if (!sizes.count(d)) continue;
-    md << "### Table " << pt.number << " " << capitalised(d) << ", time in seconds\n\n";
-    const bool with_paper = overlaps(sizes[d], pt.sizes);
-    std::vector<std::string> head = {"Datasize"};
-    for (const Series& s : series[d]) head.push_back(s.label());
-    if (with_paper)
-      for (const char* p : {"Kd-tree", "BRIO", "Hilbert"}) head.push_back(std::string("paper ") + p);
-    md << md_row(head) << md_rule(head.size());
-    for (std::size_t n : sizes[d]) {
-      std::vector<std::string> row = {size_str(n)};
-      for (const Series& s : series[d]) {
-        const BenchRecord* r = idx.find(d, n, s);
-        row.push_back(!r ? "" : r->status == "ok" ? sig3(r->total_seconds) : status_cell(*r));
-      }
-      const auto it = std::find(pt.sizes.begin(), pt.sizes.end(), n);
-      for (int k = 0; with_paper && k < 3; ++k)
-        row.push_back(it == pt.sizes.end() ? "" : fixed(pt.seconds[std::size_t(it - pt.sizes.begin())][k], 0));
-      md << md_row(row);
-    }
-    md << "\n";
-    if (!with_paper) md << no_overlap_note(pt.sizes) << "\n";
-  }
-
-  // ---- Tables 8-14: counts ----
-  md << "## Tables 8-14: orientation tests and conflicting tets per point\n\n";
-  for (const paper::CountTable& pt : paper::kCounts) {
-    const std::string d = pt.dist;
-    if (!sizes.count(d)) continue;
-    md << "### Table " << pt.number << " " << capitalised(d)
-       << ": the number of orientation tests and conflicting elements per point\n\n";
-    std::vector<std::string> head = {"Data size", ""};
-    for (std::size_t n : sizes[d]) head.push_back(size_str(n));
-    md << md_row(head) << md_rule(head.size(), 2);
-    for (const Series& s : series[d]) {
-      if (s.kernel == "tetgen" || s.kernel == "cgal-plain") continue;  // not instrumented
-      for (int what = 0; what < 2; ++what) {
-        std::vector<std::string> row = {what == 0 ? s.label() : "", what == 0 ? "Orientation" : "Conflicts"};
-        for (std::size_t n : sizes[d]) {
-          const BenchRecord* r = idx.find(d, n, s);
-          if (!r) row.push_back("");
-          else if (r->status != "ok") row.push_back(status_cell(*r));
-          else row.push_back(fixed(what == 0 ? r->orient_per_point : r->conflicts_per_point, 3));
-        }
-        md << md_row(row);
-      }
-    }
-    const char* names[3] = {"paper Kd-tree", "paper BRIO", "paper Hilbert"};
-    const bool with_paper = overlaps(sizes[d], pt.sizes);
-    for (int k = 0; with_paper && k < 3; ++k) {
-      for (int what = 0; what < 2; ++what) {
-        std::vector<std::string> row = {what == 0 ? names[k] : "", what == 0 ? "Orientation" : "Conflicts"};
-        for (std::size_t n : sizes[d]) {
-          const auto it = std::find(pt.sizes.begin(), pt.sizes.end(), n);
-          const std::size_t j = std::size_t(it - pt.sizes.begin());
-          row.push_back(it == pt.sizes.end() ? ""
-                                             : fixed(what == 0 ? pt.orient[k][j] : pt.conflicts[k][j], 3));
-        }
-        md << md_row(row);
-      }
-    }
-    if (!with_paper) md << "\n" << no_overlap_note(pt.sizes);
-    else if (*pt.note) md << "\nPaper: " << pt.note << ".\n";
-    md << "\n";
-  }
-
-  // ---- Table 15: order building ----
-  md << "## Table 15: order building time in seconds, kd-tree (kd-bfs) and Hilbert orders\n\n"
-        "(and kd-bfs-hilbert, not in the paper)\n\n";
-  if (order_sizes.empty()) {
-    md << "Not run (needs the cube or the cylinder distribution).\n\n";
-  } else {
-    md << "Building the order alone (`order-only` runs; kdmesh builds the kd-tree's two halves below "
-          "the root on two threads for large inputs).\n\n";
-    const paper::OrderTable& pt = paper::kOrderBuild;
-    const bool with_paper = overlaps(order_sizes, pt.sizes);
-    std::vector<std::string> head = {"Datasize",         "cube kd-bfs",      "cube hilbert",
-                                     "cube kd-bfs-hilbert", "cylinder kd-bfs", "cylinder hilbert",
-                                     "cylinder kd-bfs-hilbert"};
-    if (with_paper)
-      for (const char* h : {"paper cube Kd-tree", "paper cube Hilbert", "paper cylinder Kd-tree",
-                            "paper cylinder Hilbert"})
-        head.push_back(h);
-    md << md_row(head) << md_rule(head.size());
-    for (std::size_t n : order_sizes) {
-      std::vector<std::string> row = {size_str(n)};
-      for (const char* d : {"cube", "cylinder"}) {
-        for (const char* o : {"kd-bfs", "hilbert", "kd-bfs-hilbert"}) {
-          const BenchRecord* r = idx.find(d, n, {"order-only", o});
-          row.push_back(!r ? "" : r->status == "ok" ? sig3(r->order_seconds) : status_cell(*r));
-        }
-      }
-      const auto it = std::find(pt.sizes.begin(), pt.sizes.end(), n);
-      const std::size_t j = std::size_t(it - pt.sizes.begin());
-      for (const auto* col : {&pt.cube_kd, &pt.cube_hilbert, &pt.cylinder_kd, &pt.cylinder_hilbert})
-        if (with_paper) row.push_back(it == pt.sizes.end() ? "" : fixed((*col)[j], 0));
-      md << md_row(row);
-    }
-    md << "\n";
-    if (!with_paper) md << no_overlap_note(pt.sizes) << "\n";
-  }
-
-  // ---- memory and CGAL's other counts (not in the paper) ----
-  std::set<Series> all_series;
-  for (const auto& [d, ss] : series) all_series.insert(ss.begin(), ss.end());
-  md << "## Peak memory, bytes per point (not in the paper)\n\n"
-        "(peak RSS - idle child) / n; the points (24 B) and the order are included.\n\n";
-  {
-    std::vector<std::string> head = {"Distribution", "Datasize"};
-    for (const Series& s : all_series) head.push_back(s.label());
-    md << md_row(head) << md_rule(head.size(), 2);
-    for (const paper::TimeTable& pt : paper::kTimes) {
-      if (!sizes.count(pt.dist)) continue;
-      for (std::size_t n : sizes[pt.dist]) {
-        std::vector<std::string> row = {pt.dist, size_str(n)};
-        for (const Series& s : all_series) {
-          const BenchRecord* r = idx.find(pt.dist, n, s);
-          row.push_back(!r ? "" : r->status == "ok" ? fixed(r->bytes_per_point, 0) : status_cell(*r));
-        }
-        md << md_row(row);
-      }
-    }
-    md << "\n";
-  }
-  md << "## CGAL's other counts per point (not in the paper)\n\n"
-        "All `Orientation_3` calls / `Side_of_oriented_sphere_3` calls, per point.\n\n";
-  {
-    std::vector<Series> cg;
-    for (const Series& s : all_series)
-      if (s.kernel == "cgal") cg.push_back(s);
-    std::vector<std::string> head = {"Distribution", "Datasize"};
-    for (const Series& s : cg) head.push_back(s.label());
-    md << md_row(head) << md_rule(head.size(), 2);
-    for (const paper::TimeTable& pt : paper::kTimes) {
-      if (!sizes.count(pt.dist)) continue;
-      for (std::size_t n : sizes[pt.dist]) {
-        std::vector<std::string> row = {pt.dist, size_str(n)};
-        for (const Series& s : cg) {
-          const BenchRecord* r = idx.find(pt.dist, n, s);
-          row.push_back(!r ? "" : r->status != "ok" ? status_cell(*r)
-                                : fixed(r->orient_all_per_point, 1) + " / " + fixed(r->sphere_tests_per_point, 1));
-        }
-        md << md_row(row);
-      }
-    }
-    md << "\n";
-  }
+  time_tables(md, t);
+  count_tables(md, t);
+  order_table(md, t);
+  memory_tables(md, t);
 
   AtomicFile file(path);
   {
