@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "mesher/bucket_scatter.h"
 #include "core/parallel_for.h"
+#include "core/uninit_allocator.h"
 #include "mesher/volume/volume_mesh.h"
 
 namespace kdmesh {
@@ -90,7 +91,7 @@ void ImproveTets::match_faces(std::size_t np) {
   struct Rec {
     std::uint32_t b, c, ref;
   };
-  std::vector<Rec> faces(4 * nt);
+  std::vector<Rec, UninitAllocator<Rec>> faces(4 * nt);  // written by the scatter, not zeroed first
   const std::vector<std::size_t> start = bucket_scatter(
       4 * nt, np, [&](std::size_t f) { return face_key(&tv_[4 * (f / 4)], int(f % 4))[0]; },
       [&](std::size_t f, std::size_t at) {

@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "mesher/bucket_scatter.h"
 #include "core/parallel_for.h"
+#include "core/uninit_allocator.h"
 
 namespace kdmesh {
 
@@ -29,7 +30,7 @@ SizeFidelity measure_size_fidelity(const PointSet& points, const std::vector<std
     const std::uint32_t p = tets[4 * (k / 6) + kEdge[k % 6][0]], q = tets[4 * (k / 6) + kEdge[k % 6][1]];
     return std::pair{std::min(p, q), std::max(p, q)};
   };
-  std::vector<std::uint32_t> other(6 * nt);
+  std::vector<std::uint32_t, UninitAllocator<std::uint32_t>> other(6 * nt);  // written by the scatter
   const std::vector<std::size_t> start = bucket_scatter(
       6 * nt, np, [&](std::size_t k) { return ends(k).first; },
       [&](std::size_t k, std::size_t at) { other[at] = ends(k).second; });
@@ -52,7 +53,7 @@ SizeFidelity measure_size_fidelity(const PointSet& points, const std::vector<std
       from.push_back(std::uint32_t(v));
       to.push_back(other[start[v] + k]);
     }
-  std::vector<std::uint32_t>().swap(other);
+  decltype(other)().swap(other);
   SizeFidelity r;
   r.edges = ne;
   if (ne == 0) return r;
