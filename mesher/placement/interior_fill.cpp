@@ -230,11 +230,6 @@ struct LayerTry {
   double depth_u, angle, radius_u;
   double p[3], h;
   bool clash;  // conflicts with a node in the grid as it stood before the batch
-  // Distance to the surface and side (side 0 when the distance already refuses the try),
-  // when `known`: computed ahead, on several threads, for the tries likely to be asked.
-  bool known = false;
-  int side = 0;
-  double d = 0;
 };
 
 /// Boundary layer (InteriorFillOptions::layer_tries): the tries of the surface nodes in id
@@ -308,45 +303,19 @@ void add_boundary_layer(const SurfaceMesh& surface, const SurfaceQuery& query,
         tr.clash = grid.conflicts(tr.p, tr.h, options.beta);
       }
     }, 1024, nthreads);
-    // Distance and side are asked only of the tries left after the conflict tests: asked of
-    // every try without a clash, they made the 1M-facet torus scan of test_large_scan 2.7x
-    // slower (most of its layer tries clash only with nodes their own batch keeps). Which
-    // tries are left depends on the answers before them, so the tries that would be left if
-    // every one of them were kept get their answers ahead, on `threads` threads (the gear
-    // box: 3.3 s on one thread); a try that this guess took for conflicting with one that
-    // was then refused gets its answers when it is decided.
-    auto fits = [&](double d, double h) { return d >= options.clearance * h && d > 0; };
-    {
-      SpacingGrid guess(grid.lo(), grid.s0());
-      guess.set_lipschitz(sizing.options().gradation);
-      std::vector<LayerTry*> ask;
-      for (LayerTry& tr : tries) {
-        if (tr.clash || guess.conflicts(tr.p, tr.h, options.beta)) continue;
-        guess.insert(tr.p, tr.h);
-        ask.push_back(&tr);
-      }
-      parallel_for(ask.size(), [&](std::size_t b, std::size_t e, unsigned) {
-        for (std::size_t j = b; j < e; ++j) {
-          LayerTry& tr = *ask[j];
-          tr.d = query.distance(tr.p);
-          tr.side = fits(tr.d, tr.h) ? query.side(tr.p) : 0;
-          tr.known = true;
-        }
-      }, 64, nthreads);
-    }
     SpacingGrid batch(grid.lo(), grid.s0());
     batch.set_lipschitz(sizing.options().gradation);
     std::vector<const LayerTry*> accepted;
-    for (LayerTry& tr : tries) {
+    for (const LayerTry& tr : tries) {
       if (tr.clash || batch.conflicts(tr.p, tr.h, options.beta)) continue;
-      if (!tr.known) {
-        tr.d = query.distance(tr.p);
-        tr.side = fits(tr.d, tr.h) ? query.side(tr.p) : 0;
-      }
+      // Distance and side here, for the tries left: speculated for every try without a
+      // clash, they made the 1M-facet torus scan of test_large_scan 2.7x slower (most of its
+      // layer tries clash only with nodes their own batch keeps).
+      const double d = query.distance(tr.p);
       ++st.distance_queries;
-      if (!fits(tr.d, tr.h)) continue;
+      if (!(d >= options.clearance * tr.h) || !(d > 0)) continue;
       ++st.side_queries;
-      if (tr.side <= 0) continue;
+      if (query.side(tr.p) <= 0) continue;
       batch.insert(tr.p, tr.h);
       nodes.push_back(tr.p, NodeKind::interior, kNoFacet, float(tr.h));
       accepted.push_back(&tr);
