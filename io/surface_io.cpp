@@ -261,8 +261,11 @@ SurfaceMesh read_stl_ascii(const std::string& path, std::string_view data) {
 // ---------------------------------------------------------------------------------------------
 // PLY
 // ---------------------------------------------------------------------------------------------
-SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
-  const PlyHeader h = parse_ply_header(path, data);
+namespace {
+/// The header's 'vertex' and 'face' elements, checked to describe a surface whose declared
+/// counts the data section (nbytes) can hold: InputError otherwise, before any allocation.
+std::pair<const PlyElement*, const PlyElement*> ply_surface_elements(const std::string& path, const PlyHeader& h,
+                                                                     std::size_t nbytes) {
   const PlyElement* vert_el = nullptr;
   const PlyElement* face_el = nullptr;
   for (const PlyElement& e : h.elements) {
@@ -283,7 +286,6 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
   if (vert_el->count > 0xFFFFFFFFull)
     throw InputError(path, vert_el->line, "more than 2^32-1 vertices");
 
-  const std::size_t nbytes = data.size() - h.data_offset;
   // Counts the file cannot hold are rejected before anything is allocated from them.
   for (const PlyElement& e : h.elements) {
     if (!ply_count_fits(e, h.format, nbytes))
@@ -293,6 +295,13 @@ SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
                            " bytes, but the data section has only " + std::to_string(nbytes) +
                            " bytes (truncated or corrupt file)");
   }
+  return {vert_el, face_el};
+}
+}  // namespace
+
+SurfaceMesh read_ply_data(const std::string& path, std::string_view data) {
+  const PlyHeader h = parse_ply_header(path, data);
+  const auto [vert_el, face_el] = ply_surface_elements(path, h, data.size() - h.data_offset);
 
   SurfaceMesh mesh;
   std::vector<double> raw(3 * vert_el->count);

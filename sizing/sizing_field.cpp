@@ -195,7 +195,10 @@ const SizingAutoStats& SizingField::auto_stats() const {
   return impl_->auto_stats;
 }
 
-SizingField build_sizing_field(const SurfaceMesh& surface, const SizingOptions& options) {
+namespace {
+/// The options' own numbers (the zones are checked as they are built): UsageError naming the
+/// option.
+void check_options(const SizingOptions& options) {
   auto finite = [](double v) { return std::isfinite(v); };
   if (!(options.max_size > 0) || !finite(options.max_size))
     throw UsageError("sizing: max_size must be finite and > 0 (got " +
@@ -218,6 +221,12 @@ SizingField build_sizing_field(const SurfaceMesh& surface, const SizingOptions& 
   if (!(options.feature_angle_deg >= 0 && options.feature_angle_deg < 180))
     throw UsageError("sizing: feature_angle_deg must be in [0, 180) degrees (got " +
                      std::to_string(options.feature_angle_deg) + ")");
+}
+}  // namespace
+
+SizingField build_sizing_field(const SurfaceMesh& surface, const SizingOptions& options) {
+  check_options(options);
+  auto finite = [](double v) { return std::isfinite(v); };
 
   auto impl = std::make_shared<SizingField::Impl>();
   impl->options = options;
