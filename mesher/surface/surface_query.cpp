@@ -334,16 +334,13 @@ class BoxGrid {
     });
     return searched ? verdict : -1;
   }
-  /// The number of cells (the range of empty_cell's ids).
+  /// The number of cells (the range of cell()'s ids).
   std::size_t cells() const { return tstart_.empty() ? 0 : tstart_.size() - 1; }
-  /// p's cell when p lies in the grid's box and its cell lists no facet, else cells(). No
-  /// facet comes within that cell's half diagonal (plus margins) of its centre, and p lies in
-  /// that ball whatever the rounding of its index (register_triangles): all points with this
-  /// cell id lie in one facet-free ball, so on one side of the surface, never on it.
-  std::size_t empty_cell(const double* p) const {
-    const std::size_t c = cell(p);
-    return c != cells() && tstart_[c] == tstart_[c + 1] ? c : cells();
-  }
+  /// Cell c (< cells()) lists no facet. No facet comes within that cell's half diagonal (plus
+  /// margins) of its centre, and a point whose cell() is c lies in that ball whatever the
+  /// rounding of its index (register_triangles): all such points lie in one facet-free ball,
+  /// so on one side of the surface, never on it.
+  bool lists_no_facet(std::size_t c) const { return tstart_[c] == tstart_[c + 1]; }
   /// p's cell when p lies in the grid's box (and the grid is usable), else cells().
   std::size_t cell(const double* p) const {
     if (!usable_) return cells();
@@ -509,7 +506,7 @@ struct SurfaceQuery::Impl {
   Tree tree;
   BoxGrid boxes;
   /// Per grid cell, 0 until first asked, then:
-  ///  - a facet-free cell (BoxGrid::empty_cell): its side, +1 / -1, found by the first point
+  ///  - a cell that lists no facet (BoxGrid::lists_no_facet): its side, +1 / -1, found by the first point
   ///    asked there. Any point of the cell has that side, so the answer does not depend on
   ///    which point (or thread) came first.
   ///  - a cell that lists facets: the side of its centre point (BoxGrid::centre), or
@@ -552,7 +549,7 @@ int SurfaceQuery::side(const double* p) const {
   if (c == grid.cells()) return ray_parity::side(impl_->tree, p);
   std::atomic_ref<std::int8_t> known(impl_->cell_side[c]);
   int s = known.load(std::memory_order_relaxed);
-  if (grid.empty_cell(p) == c) {
+  if (grid.lists_no_facet(c)) {
     if (s == 0) {
       s = ray_parity::side(impl_->tree, p);
       if (s != 0) known.store(std::int8_t(s), std::memory_order_relaxed);  // (never 0 here)
