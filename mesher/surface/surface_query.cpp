@@ -506,9 +506,9 @@ struct SurfaceQuery::Impl {
   Tree tree;
   BoxGrid boxes;
   /// Per grid cell, 0 until first asked, then:
-  ///  - a cell that lists no facet (BoxGrid::lists_no_facet): its side, +1 / -1, found by the first point
-  ///    asked there. Any point of the cell has that side, so the answer does not depend on
-  ///    which point (or thread) came first.
+  ///  - a cell that lists no facet (BoxGrid::lists_no_facet): its side, +1 / -1, found by the
+  ///    first point asked there. Any point of the cell has that side, so the answer does not
+  ///    depend on which point (or thread) came first.
   ///  - a cell that lists facets: the side of its centre point (BoxGrid::centre), or
   ///    kCentreOnSurface.
   std::unique_ptr<std::int8_t[]> cell_side;
