@@ -23,6 +23,7 @@
 #include "mesher/delaunay/canonical_order.h"
 #include "mesher/volume/boundary_faces.h"
 #include "mesher/volume/interface_faces.h"
+#include "mesher/volume/point_grid.h"
 #include "mesher/surface/crease_points.h"
 #include "core/parallel_for.h"
 #include "mesher/tet_quality.h"
@@ -384,61 +385,6 @@ std::size_t peel_folds(const Triangulation& tri, const NodeSet& nodes, const Dom
   return peeled;
 }
 
-// ---------------------------------------------------------------------------------------------
-// A hash grid of points for "is there a node within r of p".
-class PointGrid {
- public:
-  PointGrid(double cell, const double* origin) : cell_(cell) {
-    for (int k = 0; k < 3; ++k) origin_[k] = origin[k];
-  }
-  void add(const double* p) {
-    pts_.insert(pts_.end(), p, p + 3);
-    cells_[key(cell_of(p))].push_back(std::uint32_t(pts_.size() / 3 - 1));
-  }
-  bool any_within(const double* p, double r) const {
-    const auto c = cell_of(p);
-    const double span = std::ceil(r / cell_);
-    if (span > 8 && (2 * span + 1) * (2 * span + 1) * (2 * span + 1) > double(cells_.size())) {
-      for (std::size_t i = 0; i < pts_.size(); i += 3) {  // cheaper than visiting that many cells
-        const double* q = &pts_[i];
-        if ((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]) < r * r)
-          return true;
-      }
-      return false;
-    }
-    const int k = std::max(1, int(span));
-    for (int dx = -k; dx <= k; ++dx)
-      for (int dy = -k; dy <= k; ++dy)
-        for (int dz = -k; dz <= k; ++dz) {
-          auto it = cells_.find(key({c[0] + dx, c[1] + dy, c[2] + dz}));
-          if (it == cells_.end()) continue;
-          for (std::uint32_t i : it->second) {
-            const double* q = &pts_[3 * std::size_t(i)];
-            const double d2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
-                              (p[2] - q[2]) * (p[2] - q[2]);
-            if (d2 < r * r) return true;
-          }
-        }
-    return false;
-  }
-
- private:
-  std::array<std::int64_t, 3> cell_of(const double* p) const {
-    std::array<std::int64_t, 3> c{};
-    for (int k = 0; k < 3; ++k) c[k] = std::int64_t(std::floor((p[k] - origin_[k]) / cell_));
-    return c;
-  }
-  static std::uint64_t key(std::array<std::int64_t, 3> c) {
-    std::uint64_t h = 0x9E3779B97F4A7C15ULL;
-    for (std::int64_t x : c) h = (h ^ std::uint64_t(x)) * 0xFF51AFD7ED558CCDULL + 0x632BE59BD9B4E5F5ULL;
-    return h;  // collisions only add candidates; distances decide
-  }
-  double cell_;
-  double origin_[3];
-  std::vector<double> pts_;
-  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells_;
-};
-
 std::string xyz(const double* p) {
   std::ostringstream s;
   s.precision(9);
@@ -570,9 +516,7 @@ void choose_steiner(const RecoveryPlan& plan, const NodeSet& nodes, const Domain
   const double* bmin = domain.surface.bbox_min;
   const double* bmax = domain.surface.bbox_max;
   const double diag = std::hypot(bmax[0] - bmin[0], bmax[1] - bmin[1], bmax[2] - bmin[2]);
-  PointGrid grid(cell > 0 ? cell : 1e-3 * diag, bmin);
-  for (std::size_t i = 0; i < nodes.size_count(); ++i)
-    if (!plan.drop[i]) grid.add(nodes.points.p(std::uint32_t(i)));
+  PointGrid grid(cell > 0 ? cell : 1e-3 * diag, bmin, nodes.points, plan.drop);
   // The admissible gap starts at 0.2 h and halves (down to 0.0125 h) while no candidate is
   // admissible: parts thinner than h (real scans and CAD at a coarse size) need Steiner points
   // closer than 0.2 h to the nodes already on the other side.
