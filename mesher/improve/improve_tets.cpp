@@ -220,8 +220,13 @@ bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
     }
   for (std::size_t k = 0; k < nn; ++k)
     for (int i = 0; i < 4; ++i) e.push_back({face_key(&fresh[4 * k], i), std::uint32_t(4 * k + i), 1});
+  // (The keys compared field by field: std::array's == is a memcmp call.)
+  auto same = [](const Key& a, const Key& b) { return a[0] == b[0] && a[1] == b[1] && a[2] == b[2]; };
   std::sort(e.begin(), e.end(), [](const Entry& a, const Entry& b) {
-    return a.key != b.key ? a.key < b.key : a.is_new < b.is_new;
+    if (a.key[0] != b.key[0]) return a.key[0] < b.key[0];
+    if (a.key[1] != b.key[1]) return a.key[1] < b.key[1];
+    if (a.key[2] != b.key[2]) return a.key[2] < b.key[2];
+    return a.is_new < b.is_new;
   });
   // Every key exactly twice, at least one of the two new; with boundary_may_change, a key
   // once: a new face (listed as a pair with itself: it becomes a boundary face), or a
@@ -229,8 +234,8 @@ bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
   static thread_local std::vector<Entry> pairs;
   pairs.clear();
   for (std::size_t x = 0; x < e.size();) {
-    if (x + 1 < e.size() && e[x].key == e[x + 1].key) {
-      if (!e[x + 1].is_new || (x + 2 < e.size() && e[x + 2].key == e[x].key)) return false;
+    if (x + 1 < e.size() && same(e[x].key, e[x + 1].key)) {
+      if (!e[x + 1].is_new || (x + 2 < e.size() && same(e[x + 2].key, e[x].key))) return false;
       pairs.push_back(e[x]);
       pairs.push_back(e[x + 1]);
       x += 2;
@@ -242,7 +247,8 @@ bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
   }
   e.swap(pairs);
 
-  std::vector<std::uint32_t> slot(nn);
+  static thread_local std::vector<std::uint32_t> slot;
+  slot.assign(nn, 0);
   for (std::uint32_t t : old) {
     for (int i = 0; i < 4; ++i) {
       const std::uint32_t w = tv_[4 * std::size_t(t) + i];
