@@ -158,8 +158,8 @@ void take_cell(const Cell& x, const SurfaceQuery& q, const SizingField& h, Resou
   // Bounds of h over the cell, from its centre: the cell lies in the ball of radius rho
   // around it, where h is at least the field with every zone's distance shortened by rho
   // (SizingField::lower_bound) and at most h(c) + g rho (h is g-Lipschitz). Two queries; the
-  // 8 corners sampled instead took 9 in all (the paper gear box's estimate: 4.3 s, most of it
-  // these queries, on two cores).
+  // 8 corners sampled instead took 9 in all (the paper gear box's estimate: 4.3-5.2 s, most of
+  // it these queries, on two cores; 2.7-2.8 s now).
   const double hlo = std::min(x.hc, h.lower_bound(x.c, rho));
   const double hhi = h_upper(h, x.hc, rho);
   e.samples += 2;
