@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/error.h"
 #include "core/point_set.h"
 #include "core/rng.h"
 #include "mesher/volume/point_grid.h"
@@ -97,6 +98,14 @@ TEST(PointGrid, SkippedPointsAndPointsAtDistanceRDoNotCount) {
   EXPECT_TRUE(grid.any_within(at_origin, std::nextafter(1.0, 2.0)));
   grid.add(at_origin);
   EXPECT_TRUE(grid.any_within(at_origin, 1e-9));
+}
+
+TEST(PointGrid, SkipFlagsOfAnotherLengthAreRefused) {
+  PointSet points;
+  points.push_back(0, 0, 0);
+  points.push_back(1, 0, 0);
+  const double origin[3] = {0, 0, 0};
+  EXPECT_THROW(PointGrid(0.25, origin, points, {1}), UsageError);
 }
 
 TEST(PointGrid, EmptyGrid) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <string>
 
 #include "core/error.h"
 #include "core/parallel_for.h"
@@ -18,6 +19,8 @@ PointGrid::PointGrid(double cell, const double* origin, const PointSet& points,
   for (int k = 0; k < 3; ++k) origin_[k] = origin[k];
   const std::size_t n = points.size();
   if (n >= (std::size_t(1) << 32)) throw UsageError("PointGrid: 2^32 points or more");
+  if (!skip.empty() && skip.size() != n)
+    throw UsageError("PointGrid: " + std::to_string(skip.size()) + " skip flags for " + std::to_string(n) + " points");
   std::vector<std::uint32_t> kept;
   kept.reserve(n);
   for (std::size_t i = 0; i < n; ++i)
