@@ -16,8 +16,8 @@ namespace kdmesh {
 /// out); they are bucketed by a hash of their cell in one counting sort on all cores: flat
 /// arrays, about 4 points per bucket, no allocation per cell. The recovery builds one grid per
 /// round over every node to place a few Steiner points (the paper gear box: 4.2M nodes for 32
-/// points), where a hash map of per-cell vectors took 5.6 s and its destruction 1.4 s more,
-/// all on one core. Points added later go to a small map of cells. The answers are exact and
+/// points), where a hash map of per-cell vectors took 5.6 s on one core, and freeing it most
+/// likely 2 s more (perf samples of glibc's free lists right after it). Points added later go to a small map of cells. The answers are exact and
 /// do not depend on the buckets: a hash collision only adds candidates, distances decide.
 /// `points` must outlive the grid and stay unchanged.
 class PointGrid {
