@@ -17,9 +17,10 @@ namespace kdmesh {
 /// arrays, about 4 points per bucket, no allocation per cell. The recovery builds one grid per
 /// round over every node to place a few Steiner points (the paper gear box: 4.2M nodes for 32
 /// points), where a hash map of per-cell vectors took 5.6 s on one core, and freeing it most
-/// likely 2 s more (perf samples of glibc's free lists right after it). Points added later go to a small map of cells. The answers are exact and
-/// do not depend on the buckets: a hash collision only adds candidates, distances decide.
-/// `points` must outlive the grid and stay unchanged.
+/// likely 2 s more (perf samples of glibc's free lists right after it). Points added later go
+/// to a small map of cells. The answers are exact and do not depend on the buckets: a hash
+/// collision only adds candidates, distances decide. `points` must outlive the grid and stay
+/// unchanged.
 class PointGrid {
  public:
   /// `skip` is empty or has one entry per point; points whose entry is not 0 are left out.
@@ -34,7 +35,7 @@ class PointGrid {
   using Cell = std::array<std::int64_t, 3>;
   Cell cell_of(const double* p) const;
   static std::uint64_t hash(const Cell& c);
-  bool near(const double* p, const double* q, double r2) const {
+  static bool near(const double* p, const double* q, double r2) {
     return (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]) < r2;
   }
 
