@@ -862,6 +862,42 @@ TEST(SizeFidelity, AwayFromRefinementCountsOnlyEdgesTheFieldLeavesAtTheUsersSize
   EXPECT_GT(f.mean_ratio, 2);  // the refined tet's edges are long for h = 0.1 + ...
 }
 
+/// The size-fidelity figures by hand: every distinct edge, the field at its midpoint.
+struct FidelityByHand {
+  std::size_t edges = 0, in = 0, refined = 0;
+  double sum = 0, lo = INFINITY, hi = 0;
+};
+FidelityByHand fidelity_by_hand(const PointSet& p, const std::vector<std::uint32_t>& tets,
+                                const SizingField& h) {
+  std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
+  for (std::size_t t = 0; t < tets.size(); t += 4)
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) edges.insert(std::minmax(tets[t + i], tets[t + j]));
+  FidelityByHand f;
+  f.edges = edges.size();
+  for (const auto& [a, b] : edges) {
+    const double *pa = p.p(a), *pb = p.p(b);
+    const double m[3] = {(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2};
+    const double r = std::hypot(pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]) / h(m);
+    f.sum += r;
+    f.lo = std::min(f.lo, r);
+    f.hi = std::max(f.hi, r);
+    f.in += r >= 0.7 && r <= 1.4;
+    f.refined += h(m) < 1;
+  }
+  return f;
+}
+
+void expect_fidelity_by_hand(const SizeFidelity& f, const FidelityByHand& want) {
+  ASSERT_EQ(f.edges, want.edges);
+  EXPECT_GT(want.refined, 0u);
+  const double mean = want.sum / double(want.edges);
+  EXPECT_NEAR(f.mean_ratio, mean, 1e-12 * mean);
+  EXPECT_EQ(f.min_ratio, want.lo);
+  EXPECT_EQ(f.max_ratio, want.hi);
+  EXPECT_DOUBLE_EQ(f.in_range, double(want.in) / double(want.edges));
+}
+
 // The edges whose midpoints the field refines are found even when neither end is near the
 // refinement: the figures equal those of the field evaluated at every midpoint. measure_size_
 // fidelity skips the midpoints of a vertex's edges when the field is h_max over a ball of half
@@ -881,31 +917,30 @@ TEST(SizeFidelity, EqualsTheFieldEvaluatedAtEveryMidpoint) {
   s.points = p;
   const SizingField h = point_zone_field(s, 1, 0.1, {0, 0, 0});
   const SizeFidelity f = measure_size_fidelity(p, tets, h);
-  // By hand: every distinct edge, the field at its midpoint.
-  std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
-  for (std::size_t t = 0; t < tets.size(); t += 4)
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) edges.insert(std::minmax(tets[t + i], tets[t + j]));
-  double sum = 0, lo = INFINITY, hi = 0;
-  std::size_t in = 0, refined = 0;
-  for (const auto& [a, b] : edges) {
-    const double *pa = p.p(a), *pb = p.p(b);
-    const double m[3] = {(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2};
-    const double r = std::hypot(pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]) / h(m);
-    sum += r;
-    lo = std::min(lo, r);
-    hi = std::max(hi, r);
-    in += r >= 0.7 && r <= 1.4;
-    refined += h(m) < 1;
-  }
-  ASSERT_EQ(f.edges, edges.size());
-  EXPECT_GT(refined, 0u);
-  EXPECT_NEAR(f.mean_ratio, sum / double(edges.size()), 1e-12 * sum / double(edges.size()));
-  EXPECT_EQ(f.min_ratio, lo);
-  EXPECT_EQ(f.max_ratio, hi);
-  EXPECT_DOUBLE_EQ(f.in_range, double(in) / double(edges.size()));
+  const FidelityByHand want = fidelity_by_hand(p, tets, h);
+  expect_fidelity_by_hand(f, want);
   // The long edge: 10 long, h = 0.1 + 0.3 * 0.5 at its midpoint.
-  EXPECT_DOUBLE_EQ(hi, 10 / 0.25);
+  EXPECT_DOUBLE_EQ(want.hi, 10 / 0.25);
+}
+
+// The reach of a vertex covers its edges to lower ids too. Vertex 1's edges to higher ids are
+// short and 5 from the zone, where h = h_max over a ball of their half length; its edge to 0
+// passes the zone; so do the edges of 2 and 3 to 0. Counting only the edges a vertex starts
+// (the unique edges are stored from their lower end) leaves 1, 2 and 3 "clear", and the long
+// edges' ratios about 10 instead of 36-40.
+TEST(SizeFidelity, ReachCoversTheEdgesToLowerIds) {
+  PointSet p;
+  p.push_back(-5, 0.5, 0);
+  p.push_back(5, 0.5, 0);
+  p.push_back(5.2, 0.5, 0);
+  p.push_back(5, 0.7, 0.1);
+  SurfaceMesh s;
+  s.points = p;
+  const SizingField h = point_zone_field(s, 1, 0.1, {0, 0, 0});
+  const std::vector<std::uint32_t> tets = {0, 1, 2, 3};
+  const FidelityByHand want = fidelity_by_hand(p, tets, h);
+  expect_fidelity_by_hand(measure_size_fidelity(p, tets, h), want);
+  EXPECT_GT(want.hi, 40);  // edge (0, 2): 10.2 long, h = 0.1 + 0.3 * 0.51 at its midpoint
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include "mesher/quality/size_fidelity.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <string>
 
@@ -34,39 +35,47 @@ SizeFidelity measure_size_fidelity(const PointSet& points, const std::vector<std
   const std::vector<std::size_t> start = bucket_scatter(
       6 * nt, np, [&](std::size_t k) { return ends(k).first; },
       [&](std::size_t k, std::size_t at) { other[at] = ends(k).second; });
-  std::vector<std::uint32_t> unique_count(np);
+  // Each vertex's group sorted and made unique in place. uoff[v]: the rank of v's first unique
+  // edge in the order (a, b) ascending; v's unique edges are other[start[v] ..) up to the next.
+  std::vector<std::size_t> uoff(np + 1, 0);
   parallel_for(np, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t v = b; v < e; ++v) {
       const auto first = other.begin() + start[v], last = other.begin() + start[v + 1];
       std::sort(first, last);
-      unique_count[v] = std::uint32_t(std::unique(first, last) - first);
+      uoff[v + 1] = std::size_t(std::unique(first, last) - first);
     }
   }, 1024);
-  std::vector<std::uint32_t> from;  // each unique edge's a, in order
-  std::vector<std::uint32_t> to;
-  std::size_t ne = 0;
-  for (std::size_t v = 0; v < np; ++v) ne += unique_count[v];
-  from.reserve(ne);
-  to.reserve(ne);
-  for (std::size_t v = 0; v < np; ++v)
-    for (std::uint32_t k = 0; k < unique_count[v]; ++k) {
-      from.push_back(std::uint32_t(v));
-      to.push_back(other[start[v] + k]);
-    }
-  decltype(other)().swap(other);
+  for (std::size_t v = 0; v < np; ++v) uoff[v + 1] += uoff[v];
+  const std::size_t ne = uoff[np];
   SizeFidelity r;
   r.edges = ne;
   if (ne == 0) return r;
   const double far = sizing.max_size();
-  // Each vertex's reach: half its longest edge, so that the midpoints of its edges are within it.
+  // Each vertex's reach: half its longest edge, so that the midpoints of its edges are within
+  // it. An edge raises both ends' reach (a max: the same result on any number of threads). The
+  // reach only bounds the ball of `clear` below, which has a margin, so it is not the figures'
+  // hypot to the last bit.
   std::vector<double> reach(np, 0.0);
-  for (std::size_t i = 0; i < ne; ++i) {
-    const double* a = points.p(from[i]);
-    const double* c = points.p(to[i]);
-    const double half = std::hypot(c[0] - a[0], c[1] - a[1], c[2] - a[2]) / 2;
-    reach[from[i]] = std::max(reach[from[i]], half);
-    reach[to[i]] = std::max(reach[to[i]], half);
-  }
+  auto raise = [&](std::uint32_t v, double x) {
+    std::atomic_ref<double> at(reach[v]);
+    double now = at.load(std::memory_order_relaxed);
+    while (x > now && !at.compare_exchange_weak(now, x, std::memory_order_relaxed)) {
+    }
+  };
+  parallel_for(np, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t v = b; v < e; ++v) {
+      const double* a = points.p(std::uint32_t(v));
+      double own = 0;
+      for (std::size_t k = start[v]; k < start[v] + (uoff[v + 1] - uoff[v]); ++k) {
+        const double* c = points.p(other[k]);
+        const double d[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        const double half = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / 2;
+        own = std::max(own, half);
+        raise(other[k], half);
+      }
+      raise(std::uint32_t(v), own);
+    }
+  }, 1024);
   // The field is exactly h_max where nothing refines it (a min over terms that are all >= it).
   // `clear`: h_max over the whole ball of the vertex's reach (a lower bound of the field there,
   // taken over a ball a little larger than the reach so that the bound's rounding cannot matter),
@@ -91,15 +100,20 @@ SizeFidelity measure_size_fidelity(const PointSet& points, const std::vector<std
   parallel_for(part.size(), [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t k = b; k < e; ++k) {
       Part p;
-      for (std::size_t i = k * kBlock; i < std::min(ne, (k + 1) * kBlock); ++i) {
-        const double* a = points.p(from[i]);
-        const double* c = points.p(to[i]);
+      // Edge i is v's (i - uoff[v])-th, v the vertex whose range holds i.
+      const std::size_t i0 = k * kBlock, i1 = std::min(ne, (k + 1) * kBlock);
+      std::size_t v = std::size_t(std::upper_bound(uoff.begin(), uoff.end(), i0) - uoff.begin()) - 1;
+      for (std::size_t i = i0; i < i1; ++i) {
+        while (i >= uoff[v + 1]) ++v;
+        const std::uint32_t w = other[start[v] + (i - uoff[v])];
+        const double* a = points.p(std::uint32_t(v));
+        const double* c = points.p(w);
         const double m[3] = {(a[0] + c[0]) / 2, (a[1] + c[1]) / 2, (a[2] + c[2]) / 2};
         const double length = std::hypot(c[0] - a[0], c[1] - a[1], c[2] - a[2]);
-        const double hm = clear[from[i]] || clear[to[i]] ? far : sizing(m);
+        const double hm = clear[v] || clear[w] ? far : sizing(m);
         const double ratio = length / hm;
         p.sum += ratio;
-        if (!(hm < far) && unrefined[from[i]] && unrefined[to[i]]) {
+        if (!(hm < far) && unrefined[v] && unrefined[w]) {
           ++p.away;
           p.away_sum += length / far;
         }
