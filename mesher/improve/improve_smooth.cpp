@@ -76,7 +76,7 @@ class VertexStar {
       st_.push_back(s);
       for (int k = 0; k < 4; ++k) {
         if (k == s.iv) continue;
-        link_.push_back(tv[k]);
+        add_link(tv[k]);
         if (m.adj(t, k) == kImproveNone) {  // a boundary face holding v
           bfaces_.push_back({tv[kTetFace[k][0]], tv[kTetFace[k][1]], tv[kTetFace[k][2]]});
           std::array<double, 3> n;
@@ -85,8 +85,7 @@ class VertexStar {
         }
       }
     }
-    std::sort(link_.begin(), link_.end());
-    link_.erase(std::unique(link_.begin(), link_.end()), link_.end());
+    finish_link();
     if (!on_surface_) return bfaces_.empty();
     if (bfaces_.empty()) return false;
     facet_ = m.nodes().facet[v];
@@ -256,6 +255,33 @@ class VertexStar {
   }
 
  private:
+  /// Adds w to the link unless it is there: a small open-addressing set (a vertex is seen
+  /// through 3-6 tets of its star; sorting every sighting took a tenth of the relaxation).
+  /// Past kLinkSlots / 2 vertices the link takes every sighting and finish_link sorts them out.
+  void add_link(std::uint32_t w) {
+    if (link_.size() >= kLinkSlots / 2) {
+      link_.push_back(w);
+      return;
+    }
+    for (std::uint32_t h = (w * 0x9E3779B1u) >> 24;; h = (h + 1) & (kLinkSlots - 1)) {
+      if (slot_[h] == w) return;
+      if (slot_[h] == kEmptySlot) {
+        slot_[h] = w;
+        used_.push_back(h);
+        link_.push_back(w);
+        return;
+      }
+    }
+  }
+  /// The link sorted, without repeats; the set emptied for the next star.
+  void finish_link() {
+    for (std::uint32_t h : used_) slot_[h] = kEmptySlot;
+    used_.clear();
+    const bool spilled = link_.size() > kLinkSlots / 2;
+    std::sort(link_.begin(), link_.end());
+    if (spilled) link_.erase(std::unique(link_.begin(), link_.end()), link_.end());
+  }
+
   /// x to the closest point of a feature edge of the facet closest to x.
   bool project_on_curve(double* x) const {
     double cp[3];
@@ -301,7 +327,14 @@ class VertexStar {
   double n_[3] = {0, 0, 0};   // the facet's unit normal
   double tn_[3] = {0, 0, 0};  // the tangent plane's unit normal (n_ on a planar fan)
   const double* fp_[3] = {nullptr, nullptr, nullptr};
-  std::vector<std::uint32_t> star_, link_;
+  static constexpr std::uint32_t kLinkSlots = 256, kEmptySlot = 0xFFFFFFFFu;
+  std::vector<std::uint32_t> star_, link_, used_;
+  std::array<std::uint32_t, kLinkSlots> slot_ = filled_slots();
+  static constexpr std::array<std::uint32_t, kLinkSlots> filled_slots() {
+    std::array<std::uint32_t, kLinkSlots> a{};
+    for (std::uint32_t& x : a) x = kEmptySlot;
+    return a;
+  }
   std::vector<StarTet> st_;
   std::vector<std::array<std::uint32_t, 3>> bfaces_;
   std::vector<std::array<double, 3>> bnormal_;
