@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <set>
 #include <string>
@@ -824,6 +825,47 @@ TEST(ImproveTets, InsideOkMovedAgreesWithTheFullTest) {
   }
   EXPECT_GT(checked, 1000);
   EXPECT_GT(rejected, 10);  // some moves leave the solid
+}
+
+// relax_vertex with the star's values given (`known`, as relax_pass keeps them) moves every
+// vertex exactly as without them, and leaves the values of every tet current: a move that did
+// not store its star's new values (or stored them in the wrong slots) makes a later vertex
+// read stale ones, and the known values differ from the recomputed ones at the end.
+TEST(ImproveSmooth, RelaxWithKnownStarValuesMovesAlikeAndKeepsThemCurrent) {
+  Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.2);
+  VolumeMesh copy = p.mesh;
+  ImproveTets plain(p.mesh.nodes, p.mesh.tets, p.mesh.tet_region);
+  ImproveTets fast(copy.nodes, copy.tets, copy.tet_region);
+  for (ImproveTets* m : {&plain, &fast}) m->inside_query = p.query.get();
+  SmoothContext ctx;
+  ctx.surface = &p.surface;
+  ctx.query = p.query.get();
+  ctx.on_surface = 1e-11 * std::sqrt(3.0);
+  std::vector<double> sine(fast.capacity(), std::numeric_limits<double>::infinity()), ratio(fast.capacity(), 0);
+  auto values = [&](std::uint32_t t) {
+    const std::uint32_t* v = fast.v(t);
+    return tet_sine_ratio(fast.p(v[0]), fast.p(v[1]), fast.p(v[2]), fast.p(v[3]));
+  };
+  for (std::uint32_t t = 0; t < fast.capacity(); ++t)
+    if (fast.alive(t)) sine[t] = values(t).sine, ratio[t] = values(t).ratio;
+  const StarValues known{sine.data(), ratio.data()};
+  std::size_t moved = 0, surface_moved = 0;
+  for (int sweep = 0; sweep < 2; ++sweep)
+    for (std::uint32_t v = 0; v < p.mesh.nodes.size_count(); ++v) {
+      const bool a = relax_vertex(plain, v, ctx, 0.2);
+      ASSERT_EQ(relax_vertex(fast, v, ctx, 0.2, &known), a) << "vertex " << v;
+      for (int k = 0; k < 3; ++k) ASSERT_EQ(fast.p(v)[k], plain.p(v)[k]) << "vertex " << v;
+      moved += a;
+      surface_moved += a && p.mesh.nodes.kind[v] != NodeKind::interior;
+    }
+  EXPECT_GT(moved, 200u) << surface_moved;
+  EXPECT_GT(surface_moved, 20u) << moved;
+  for (std::uint32_t t = 0; t < fast.capacity(); ++t) {
+    if (!fast.alive(t)) continue;
+    ASSERT_EQ(sine[t], values(t).sine) << "tet " << t;
+    ASSERT_EQ(ratio[t], values(t).ratio) << "tet " << t;
+  }
+  expect_consistent(fast);
 }
 
 // femur.ply at diag/40 failed its mesh check (exit 5) once surface nodes slid on curved

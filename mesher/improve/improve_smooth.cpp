@@ -162,20 +162,31 @@ class VertexStar {
   /// With v at x: the smallest tet_sine of the star (eval) and the sum of its radius ratios
   /// (-inf if a tet is inverted), in one sweep. The sweep stops at the first inverted tet or
   /// tet_sine below `reject_below`, with the ratio -inf: a move the caller refuses either way.
-  SineRatio eval_both(const double* x, double reject_below = -std::numeric_limits<double>::infinity()) const {
-    SineRatio out{std::numeric_limits<double>::infinity(), 0};
-    for (const StarTet& t : st_) {
+  /// If `each` is given, it gets every tet's values (when the sweep runs to the end).
+  SineRatio eval_both(const double* x, double reject_below = -std::numeric_limits<double>::infinity(),
+                      std::vector<SineRatio>* each = nullptr) const {
+    if (each) each->clear();
+    return sweep_both(reject_below, [&](std::size_t j) {
+      const StarTet& t = st_[j];
       const double* p[4] = {t.p[0], t.p[1], t.p[2], t.p[3]};
       p[t.iv] = x;
       const SineRatio q = tet_sine_ratio(p[0], p[1], p[2], p[3]);
-      out.sine = std::min(out.sine, q.sine);
-      if (!(q.ratio > 0) || out.sine < reject_below) {
-        out.ratio = -std::numeric_limits<double>::infinity();
-        return out;
-      }
-      out.ratio += q.ratio;
+      if (each) each->push_back(q);
+      return q;
+    });
+  }
+  /// eval_both at v's own position, from the values `known` holds for the star's tets.
+  SineRatio known_both(const StarValues& known) const {
+    return sweep_both(-std::numeric_limits<double>::infinity(), [&](std::size_t j) {
+      return SineRatio{known.sine[star_[j]], known.ratio[star_[j]]};
+    });
+  }
+  /// Writes the star's values (in star order) to `known`.
+  void store(const StarValues& known, const std::vector<SineRatio>& each) const {
+    for (std::size_t j = 0; j < each.size(); ++j) {
+      known.sine[star_[j]] = each[j].sine;
+      known.ratio[star_[j]] = each[j].ratio;
     }
-    return out;
   }
   /// Projects x onto the facet plane (surface nodes of a planar fan) or onto the closest
   /// point of the surface (curved fan).
@@ -255,6 +266,24 @@ class VertexStar {
   }
 
  private:
+  /// The smallest sine and the sum of the ratios of value(j) over the star's tets, in star
+  /// order; stops at the first tet with ratio <= 0 or sine below `reject_below`, with the sum
+  /// -inf.
+  template <class Value>
+  SineRatio sweep_both(double reject_below, Value&& value) const {
+    SineRatio out{std::numeric_limits<double>::infinity(), 0};
+    for (std::size_t j = 0; j < st_.size(); ++j) {
+      const SineRatio q = value(j);
+      out.sine = std::min(out.sine, q.sine);
+      if (!(q.ratio > 0) || out.sine < reject_below) {
+        out.ratio = -std::numeric_limits<double>::infinity();
+        return out;
+      }
+      out.ratio += q.ratio;
+    }
+    return out;
+  }
+
   /// Adds w to the link unless it is there: a small open-addressing set (a vertex is seen
   /// through 3-6 tets of its star; sorting every sighting took a tenth of the relaxation).
   /// Past kLinkSlots / 2 vertices the link takes every sighting and finish_link sorts them out.
@@ -442,25 +471,28 @@ bool smooth_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, do
   return moved;
 }
 
-bool relax_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, double floor) {
+bool relax_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, double floor,
+                  const StarValues* known) {
   static thread_local VertexStar vs;
+  static thread_local std::vector<SineRatio> each;
   if (!vs.load(m, v, ctx, false)) return false;
   const double* x0 = m.p(v);
   double c[3] = {0, 0, 0};
   for (std::uint32_t w : vs.link())
     for (int k = 0; k < 3; ++k) c[k] += m.p(w)[k];
   for (double& ck : c) ck /= double(vs.link().size());
-  const SineRatio old = vs.eval_both(x0);
+  const SineRatio old = known ? vs.known_both(*known) : vs.eval_both(x0);
   const double q_floor = std::min(old.sine, floor);
   for (double f : {1.0, 0.5, 0.25}) {
     double y[3];
     for (int k = 0; k < 3; ++k) y[k] = x0[k] + f * (c[k] - x0[k]);
     if (!vs.project(y)) continue;
-    const SineRatio now = vs.eval_both(y, q_floor);  // stops at a tet below q_floor
+    const SineRatio now = vs.eval_both(y, q_floor, known ? &each : nullptr);  // stops at a tet below q_floor
     if (!(now.ratio > old.ratio)) continue;
     if (now.sine < q_floor) continue;
     if (!vs.acceptable(y)) continue;
     vs.commit(m, y);
+    if (known) vs.store(*known, each);  // the sweep ran to the end: a ratio sum, not -inf
     return true;
   }
   return false;

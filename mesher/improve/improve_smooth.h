@@ -42,6 +42,15 @@ bool smooth_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx,
 /// Smart Laplacian: moves v towards the centroid of its neighbours (the whole way, half or a
 /// quarter) if that raises the sum of the star's radius ratios and keeps the star's smallest
 /// tet_sine at least min(its old value, floor). For the mean quality of the bulk.
-bool relax_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, double floor);
+///
+/// `known`, if given, holds tet_sine and tet_radius_ratio of every tet slot of v's star (the
+/// star as it stands): they are read instead of computed, and a move writes its star's new
+/// values there. Vertices that share no tet may relax at once with one `known`.
+struct StarValues {
+  double* sine = nullptr;   ///< per tet slot: tet_sine
+  double* ratio = nullptr;  ///< per tet slot: tet_radius_ratio
+};
+bool relax_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, double floor,
+                  const StarValues* known = nullptr);
 
 }  // namespace kdmesh

@@ -4,8 +4,11 @@
 #pragma once
 #include <cstdint>
 #include <limits>
+#include <string>
+#include <utility>
 #include <vector>
 
+#include "core/error.h"
 #include "mesher/improve/improve_flips.h"
 #include "mesher/improve/improve_tets.h"
 #include "core/parallel_for.h"
@@ -25,6 +28,14 @@ class SineCache {
       for (std::size_t t = b; t < e; ++t)
         if (m_.alive(std::uint32_t(t))) q_[t] = sine_of(m_, std::uint32_t(t));
     }, 65536, threads_);
+  }
+  /// Takes `q` as the cache: tet_sine of every tet slot (+inf for dead slots), as refresh_all
+  /// would compute it (a pass that kept such values up to date itself).
+  void assign(std::vector<double> q) {
+    if (q.size() != m_.capacity())
+      throw UsageError("SineCache::assign: " + std::to_string(q.size()) + " values for " +
+                       std::to_string(m_.capacity()) + " tet slots");
+    q_ = std::move(q);
   }
   /// Slot t changed (created, killed, or a vertex moved); returns its sine.
   double refresh(std::uint32_t t) {
