@@ -10,6 +10,7 @@
 #include <numbers>
 #include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/error.h"
@@ -696,6 +697,55 @@ TEST(InteriorFill, BoundaryLayerInBatchesIsTheSameOnAnyThreadCountAndKeepsItsSpa
       worst = std::min(worst, dist(ns.points.p(std::uint32_t(i)), ns.points.p(std::uint32_t(j))) /
                                   ((h[i] + h[j]) / 2));
   EXPECT_GE(worst, 0.75 * (1 - 1e-9));
+}
+
+// Node placement generates the lattice's candidates (InteriorLattice::work) on a helper thread
+// while it samples the surface, and the calling thread joins in afterwards. Any number of
+// threads calling work() at any time gives fill_interior's nodes on one thread; finish()
+// before every block is generated (never started, or stopped) is an error, not fewer nodes.
+TEST(InteriorFill, LatticeGeneratedAheadOnAnyThreadsGivesTheSameNodes) {
+  const Model m = cylinder(0.5, 1, 48);
+  const SurfaceQuery q(m.surface.mesh);
+  const SizingField field = point_zone_field(m.surface.mesh, 0.05, 0.015, {0.5, 0, 0.5});
+  const double glo[3] = {-2, -2, -2};
+  SpacingGrid grid(glo, field.min_size());
+  grid.set_lipschitz(field.options().gradation);
+  NodeSet surface_nodes;
+  place_edge_nodes(m.surface.mesh, m.features, field, 0.3, grid, surface_nodes);
+  SurfaceSamplingOptions so;
+  so.beta = 0.7;
+  place_surface_nodes(m.surface.mesh, field, so, grid, surface_nodes);
+  InteriorFillOptions o;
+  o.beta = 0.75;
+  o.threads = 1;
+  SpacingGrid g1 = grid;
+  NodeSet one = surface_nodes;
+  const InteriorFillStats s1 = fill_interior(m.surface.mesh, m.surface.bbox_min, m.surface.bbox_max, q,
+                                             field, o, g1, one);
+  ASSERT_GT(s1.lattice_nodes, 1000u);
+  o.threads = 2;
+  InteriorLattice lattice(m.surface.bbox_min, m.surface.bbox_max, q, field, o);
+  std::vector<std::thread> early;
+  for (int i = 0; i < 3; ++i) early.emplace_back([&] { lattice.work(); });
+  lattice.work_on(2);
+  for (auto& t : early) t.join();
+  SpacingGrid g2 = grid;
+  NodeSet ahead = surface_nodes;
+  const InteriorFillStats s2 = lattice.finish(m.surface.mesh, g2, ahead);
+  EXPECT_TRUE(same(one, ahead));
+  EXPECT_EQ(s2.candidates, s1.candidates);
+  EXPECT_EQ(s2.lattice_nodes, s1.lattice_nodes);
+  EXPECT_EQ(s2.distance_queries, s1.distance_queries);
+
+  InteriorLattice never(m.surface.bbox_min, m.surface.bbox_max, q, field, o);
+  SpacingGrid g3 = grid;
+  NodeSet ns = surface_nodes;
+  EXPECT_THROW(never.finish(m.surface.mesh, g3, ns), UsageError);
+  InteriorLattice stopped(m.surface.bbox_min, m.surface.bbox_max, q, field, o);
+  stopped.stop();
+  stopped.work();
+  EXPECT_THROW(stopped.finish(m.surface.mesh, g3, ns), UsageError);
+  EXPECT_EQ(ns.size_count(), surface_nodes.size_count());  // nothing added
 }
 
 // ---- thin plate: no room inside ----

@@ -6,6 +6,9 @@
 #include <atomic>
 #include <cmath>
 #include <exception>
+#include <memory>
+#include <mutex>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -326,16 +329,35 @@ void add_boundary_layer(const SurfaceMesh& surface, const SurfaceQuery& query,
 }
 }  // namespace
 
-InteriorFillStats fill_interior(const SurfaceMesh& surface, const double* lo, const double* hi,
-                                const SurfaceQuery& query,
-                                const SizingField& sizing, const InteriorFillOptions& options,
-                                SpacingGrid& grid, NodeSet& nodes,
-                                const std::function<void(double)>& progress) {
+struct InteriorLattice::Impl {
+  InteriorFillOptions options;
+  const SurfaceQuery& query;
+  const SizingField& sizing;
+  Filler F;
+  double lo[3], hi[3];
+  std::int64_t nb[3];
+  std::size_t nroots = 0;
+  std::vector<Filler::Local> locals;
+  std::atomic<std::size_t> next{0}, done{0};
+  std::mutex error_mutex;
+  std::exception_ptr error;
+
+  Impl(const double* l, const double* h, const SurfaceQuery& q, const SizingField& s,
+       const InteriorFillOptions& o)
+      : options(o), query(q), sizing(s),
+        F{q, s, options, s.max_size(), s.min_size(), 0, std::log(o.rho), 0} {
+    std::copy_n(l, 3, lo);
+    std::copy_n(h, 3, hi);
+  }
+};
+
+InteriorLattice::InteriorLattice(const double* lo, const double* hi, const SurfaceQuery& query,
+                                 const SizingField& sizing, const InteriorFillOptions& options)
+    : impl_(std::make_unique<Impl>(lo, hi, query, sizing, options)) {
   if (!(options.kappa > 0) || !(options.rho > 1) || !(options.beta > 0) ||
       !(options.clearance >= 0))
     throw UsageError("interior fill: kappa, beta must be > 0, rho > 1, clearance >= 0");
-  Filler F{query, sizing, options, sizing.max_size(), sizing.min_size(),
-           0, std::log(options.rho), 0};
+  Filler& F = impl_->F;
   // Same-level lattice nodes must never conflict (the acceptance below relies on it).
   if (!(options.beta * std::sqrt(options.rho) < 0.8660254037844386 * options.kappa))
     throw UsageError("interior fill: beta must be < sqrt(3)/2 * kappa / sqrt(rho)");
@@ -345,49 +367,63 @@ InteriorFillStats fill_interior(const SurfaceMesh& surface, const double* lo, co
   // faster (a curvature bound) only makes some nodes take a neighbouring level.
   F.lip = 1.05 * std::max(0.0, sizing.options().gradation);
   F.max_level = int(std::lround(std::log(F.hmax / F.hmin) / F.log_rho)) + 1;
-
-  if (progress) progress(0.0);
   // Root blocks: cubes of 8 coarse cells covering the box.
   const double B = 8 * F.spacing(0);
-  std::int64_t nb[3];
-  for (int a = 0; a < 3; ++a) nb[a] = std::max<std::int64_t>(1, std::int64_t(std::ceil((hi[a] - lo[a]) / B)));
-  const std::size_t nroots = std::size_t(nb[0] * nb[1] * nb[2]);
-  std::vector<Filler::Local> locals(nroots);
-  std::atomic<std::size_t> next{0}, done{0};
-  std::vector<std::exception_ptr> errors(std::max(1u, options.threads));
-  auto work = [&](unsigned w) {
-    try {
-      for (;;) {
-        const std::size_t r = next.fetch_add(1);
-        if (r >= nroots) return;
-        const std::int64_t ix = std::int64_t(r % std::size_t(nb[0]));
-        const std::int64_t iy = std::int64_t((r / std::size_t(nb[0])) % std::size_t(nb[1]));
-        const std::int64_t iz = std::int64_t(r / std::size_t(nb[0] * nb[1]));
-        const double l[3] = {lo[0] + double(ix) * B, lo[1] + double(iy) * B, lo[2] + double(iz) * B};
-        const double h[3] = {lo[0] + double(ix + 1) * B, lo[1] + double(iy + 1) * B,
-                             lo[2] + double(iz + 1) * B};
-        F.block(l, h, Filler::Ball{}, locals[r]);
-        done.fetch_add(1);
-      }
-    } catch (...) {
-      errors[w] = std::current_exception();
-      next.store(nroots);
-    }
-  };
-  const unsigned nthreads = std::max(1u, options.threads);
-  std::vector<std::thread> pool;
-  for (unsigned w = 1; w < nthreads; ++w) pool.emplace_back(work, w);
-  work(0);
-  for (auto& t : pool) t.join();
-  for (auto& e : errors)
-    if (e) std::rethrow_exception(e);
-  if (progress) progress(0.5);
+  for (int a = 0; a < 3; ++a)
+    impl_->nb[a] = std::max<std::int64_t>(1, std::int64_t(std::ceil((hi[a] - lo[a]) / B)));
+  impl_->nroots = std::size_t(impl_->nb[0] * impl_->nb[1] * impl_->nb[2]);
+  impl_->locals.resize(impl_->nroots);
+}
 
+InteriorLattice::~InteriorLattice() = default;
+
+void InteriorLattice::work() {
+  Impl& I = *impl_;
+  const double B = 8 * I.F.spacing(0);
+  try {
+    for (;;) {
+      const std::size_t r = I.next.fetch_add(1);
+      if (r >= I.nroots) return;
+      const std::int64_t ix = std::int64_t(r % std::size_t(I.nb[0]));
+      const std::int64_t iy = std::int64_t((r / std::size_t(I.nb[0])) % std::size_t(I.nb[1]));
+      const std::int64_t iz = std::int64_t(r / std::size_t(I.nb[0] * I.nb[1]));
+      const double l[3] = {I.lo[0] + double(ix) * B, I.lo[1] + double(iy) * B, I.lo[2] + double(iz) * B};
+      const double h[3] = {I.lo[0] + double(ix + 1) * B, I.lo[1] + double(iy + 1) * B,
+                           I.lo[2] + double(iz + 1) * B};
+      I.F.block(l, h, Filler::Ball{}, I.locals[r]);
+      I.done.fetch_add(1);
+    }
+  } catch (...) {
+    const std::lock_guard<std::mutex> lock(I.error_mutex);
+    if (!I.error) I.error = std::current_exception();
+    stop();
+  }
+}
+
+void InteriorLattice::stop() { impl_->next.store(impl_->nroots); }
+
+void InteriorLattice::work_on(unsigned threads) {
+  std::vector<std::thread> pool;
+  for (unsigned w = 1; w < threads; ++w) pool.emplace_back([this] { work(); });
+  work();
+  for (auto& t : pool) t.join();
+}
+
+InteriorFillStats InteriorLattice::finish(const SurfaceMesh& surface, SpacingGrid& grid, NodeSet& nodes,
+                                          const std::function<void(double)>& progress) {
+  Impl& I = *impl_;
+  if (I.error) std::rethrow_exception(I.error);
+  if (I.done.load() != I.nroots)
+    throw UsageError("interior fill: finish() before work() generated every block (" +
+                     std::to_string(I.done.load()) + " of " + std::to_string(I.nroots) + ")");
+  const InteriorFillOptions& options = I.options;
+  const Filler& F = I.F;
+  const unsigned nthreads = std::max(1u, options.threads);
   // Concatenate in root-block order, then finest level first (stable): deterministic.
   InteriorFillStats st;
   std::size_t total = 0;
   int levels = 0;
-  for (const auto& L : locals) {
+  for (const auto& L : I.locals) {
     total += L.out.size();
     st.distance_queries += L.stats.distance_queries;
     st.side_queries += L.stats.side_queries;
@@ -396,7 +432,7 @@ InteriorFillStats fill_interior(const SurfaceMesh& surface, const double* lo, co
   }
   st.candidates = total;
   std::vector<std::vector<const Candidate*>> by_level(static_cast<std::size_t>(levels));
-  for (const auto& L : locals)
+  for (const auto& L : I.locals)
     for (const Candidate& c : L.out) by_level[std::size_t(c.level)].push_back(&c);
   nodes.points.xyz.reserve(nodes.points.xyz.size() + 3 * total);
   nodes.kind.reserve(nodes.kind.size() + total);
@@ -411,7 +447,7 @@ InteriorFillStats fill_interior(const SurfaceMesh& surface, const double* lo, co
   // (finer) levels accepted before (`others`) only if there are any. The
   // result equals testing everything against one grid, at a fraction of the cost.
   SpacingGrid others(grid.lo(), grid.s0());
-  others.set_lipschitz(sizing.options().gradation);
+  others.set_lipschitz(I.sizing.options().gradation);
   // Within a level the tests are independent (both grids are only read), so they run on
   // `threads` threads; the accepted candidates keep their order.
   std::vector<const Candidate*> accepted;
@@ -440,9 +476,22 @@ InteriorFillStats fill_interior(const SurfaceMesh& surface, const double* lo, co
   st.lattice_nodes = accepted.size();
   if (progress) progress(0.9);
 
-  add_boundary_layer(surface, query, sizing, options, surface_nodes, grid, nodes, st);
+  add_boundary_layer(surface, I.query, I.sizing, options, surface_nodes, grid, nodes, st);
   if (progress) progress(1.0);
   return st;
 }
+
+InteriorFillStats fill_interior(const SurfaceMesh& surface, const double* lo, const double* hi,
+                                const SurfaceQuery& query,
+                                const SizingField& sizing, const InteriorFillOptions& options,
+                                SpacingGrid& grid, NodeSet& nodes,
+                                const std::function<void(double)>& progress) {
+  InteriorLattice lattice(lo, hi, query, sizing, options);
+  if (progress) progress(0.0);
+  lattice.work_on(std::max(1u, options.threads));
+  if (progress) progress(0.5);
+  return lattice.finish(surface, grid, nodes, progress);
+}
+
 
 }  // namespace kdmesh

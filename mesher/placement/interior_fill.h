@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <memory>
 
 #include "mesher/node_set.h"
 #include "mesher/placement/spacing_grid.h"
@@ -77,5 +78,38 @@ InteriorFillStats fill_interior(const SurfaceMesh& surface, const double* lo, co
                                 const SizingField& sizing, const InteriorFillOptions& options,
                                 SpacingGrid& grid, NodeSet& nodes,
                                 const std::function<void(double)>& progress = {});
+
+/// fill_interior in its two parts, for a caller that overlaps the first with other work. The
+/// lattice's candidates (each octree block's points of the right level, inside and clear of
+/// the surface) depend on `query`'s surface and the sizing field only, not on the nodes placed
+/// before: node placement generates them on a helper thread while it samples the surface on
+/// its own. fill_interior(...) is InteriorLattice(...), work_on(options.threads) and
+/// finish(...); the nodes are the same however many threads called work().
+class InteriorLattice {
+ public:
+  /// Throws UsageError for invalid options (as fill_interior). `query` and `sizing` must
+  /// outlive the lattice.
+  InteriorLattice(const double* lo, const double* hi, const SurfaceQuery& query,
+                  const SizingField& sizing, const InteriorFillOptions& options);
+  ~InteriorLattice();
+  InteriorLattice(const InteriorLattice&) = delete;
+  InteriorLattice& operator=(const InteriorLattice&) = delete;
+  /// Generates the candidates of the octree's root blocks not yet taken, until none is left.
+  /// Any number of threads may call it at once; an error is kept for finish().
+  void work();
+  /// work() on `threads` threads (the calling one among them); returns when all is done.
+  void work_on(unsigned threads);
+  /// Makes every work() return after its current block (for a caller that gives up).
+  void stop();
+  /// Once every work() has returned: accepts the candidates finest level first against the
+  /// nodes in `grid`, then adds the boundary layer (as fill_interior). Rethrows the first
+  /// error of work().
+  InteriorFillStats finish(const SurfaceMesh& surface, SpacingGrid& grid, NodeSet& nodes,
+                           const std::function<void(double)>& progress = {});
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace kdmesh

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
+#include <thread>
 
 #include "core/error.h"
 #include "core/timer.h"
@@ -78,6 +80,47 @@ NodeSet place_nodes(const Domain& domain, const FeatureEdges& features,
   grid.set_lipschitz(sizing.options().gradation);
   NodeSet nodes;
 
+  InteriorFillOptions io;
+  io.beta = kInteriorBeta;
+  io.clearance = options.interior_clearance;
+  io.seed = options.seed;
+  const BodyInterfaces& ifc = surface.interfaces;
+  const std::size_t n_outer = mesh.num_tris(), n_ifc = ifc.mesh.num_tris();
+  // Touching bodies: the fill sees one surface, the outer facets, then each interface facet in
+  // both orientations (the pair leaves the ray parity of the union unchanged), ids n_outer + f
+  // and n_outer + n_ifc + f.
+  Stopwatch interface_clock;
+  std::unique_ptr<SurfaceMesh> all;
+  std::unique_ptr<const SurfaceQuery> all_query;
+  if (!ifc.empty()) {
+    all = std::make_unique<SurfaceMesh>(mesh);
+    const std::uint32_t off = std::uint32_t(all->points.size());
+    all->points.xyz.insert(all->points.xyz.end(), ifc.mesh.points.xyz.begin(), ifc.mesh.points.xyz.end());
+    for (int side = 0; side < 2; ++side)
+      for (std::size_t f = 0; f < n_ifc; ++f) {
+        const std::uint32_t* t = ifc.mesh.tri(f);
+        all->tris.insert(all->tris.end(), {t[0] + off, side ? t[2] + off : t[1] + off, side ? t[1] + off : t[2] + off});
+      }
+    all_query = std::make_unique<const SurfaceQuery>(*all);
+    io.two_sided_from = std::uint32_t(n_outer);
+  }
+  if (stats) stats->interface_seconds += interface_clock.seconds();
+  // The interior lattice's candidates depend on the surface and the field only, not on the
+  // nodes placed before them: a helper thread generates them while this one samples the
+  // feature edges and the surface, which run on one thread (8.5 s of the paper gear box's
+  // placement, the second core idle). The nodes are the same either way.
+  InteriorLattice lattice(lo, hi, all_query ? *all_query : query, sizing, io);
+  struct Helper {  // joined on every path; told to stop first if the sampling throws
+    InteriorLattice& lattice;
+    std::thread thread;
+    ~Helper() {
+      if (!thread.joinable()) return;
+      lattice.stop();
+      thread.join();
+    }
+  } helper{lattice, {}};
+  if (io.threads > 1) helper.thread = std::thread([&lattice] { lattice.work(); });
+
   progress("edges", 0);
   SpacingGrid feature_balls(glo, s0);
   place_edge_nodes(mesh, features, sizing, kFeatureBeta, grid, nodes, &feature_balls);
@@ -88,38 +131,26 @@ NodeSet place_nodes(const Domain& domain, const FeatureEdges& features,
   so.beta = kSurfaceBeta;
   place_surface_nodes(mesh, sizing, so, grid, nodes, [&](double f) { progress("surface", f); }, &feature_balls);
 
-  InteriorFillOptions io;
-  io.beta = kInteriorBeta;
-  io.clearance = options.interior_clearance;
-  io.seed = options.seed;
-  const BodyInterfaces& ifc = surface.interfaces;
-  if (ifc.empty()) {
-    fill_interior(mesh, lo, hi, query, sizing, io, grid, nodes, [&](double f) { progress("interior", f); });
-    return nodes;
+  // The interfaces are sampled like the surface (after it, so their rims reuse the outer
+  // surface's feature nodes), and the interior keeps clear of them too.
+  const std::size_t first = nodes.size_count();
+  if (!ifc.empty()) {
+    interface_clock.reset();
+    const FeatureEdges inner =
+        detect_sharp_edges(ifc.mesh, 0, interface_inner_edges(surface, options.interface_feature_angle));
+    place_edge_nodes(ifc.mesh, inner, sizing, kFeatureBeta, grid, nodes, &feature_balls, true);
+    place_surface_nodes(ifc.mesh, sizing, so, grid, nodes, [&](double f) { progress("interfaces", f); }, &feature_balls);
+    for (std::size_t i = first; i < nodes.size_count(); ++i) nodes.facet[i] += std::uint32_t(n_outer);
+    if (stats) stats->interface_seconds += interface_clock.seconds();
   }
-  // Touching bodies: the interfaces are sampled like the surface (after it, so their rims reuse
-  // the outer surface's feature nodes), and the interior keeps clear of them too. The fill
-  // sees one surface: the outer facets, then each interface facet in both orientations (the
-  // pair leaves the ray parity of the union unchanged), ids n_outer + f and n_outer + n_ifc + f.
-  Stopwatch interface_clock;
-  const std::size_t n_outer = mesh.num_tris(), n_ifc = ifc.mesh.num_tris(), first = nodes.size_count();
-  const FeatureEdges inner =
-      detect_sharp_edges(ifc.mesh, 0, interface_inner_edges(surface, options.interface_feature_angle));
-  place_edge_nodes(ifc.mesh, inner, sizing, kFeatureBeta, grid, nodes, &feature_balls, true);
-  place_surface_nodes(ifc.mesh, sizing, so, grid, nodes, [&](double f) { progress("interfaces", f); }, &feature_balls);
-  SurfaceMesh all = mesh;
-  const std::uint32_t off = std::uint32_t(all.points.size());
-  all.points.xyz.insert(all.points.xyz.end(), ifc.mesh.points.xyz.begin(), ifc.mesh.points.xyz.end());
-  for (int side = 0; side < 2; ++side)
-    for (std::size_t f = 0; f < n_ifc; ++f) {
-      const std::uint32_t* t = ifc.mesh.tri(f);
-      all.tris.insert(all.tris.end(), {t[0] + off, side ? t[2] + off : t[1] + off, side ? t[1] + off : t[2] + off});
-    }
-  for (std::size_t i = first; i < nodes.size_count(); ++i) nodes.facet[i] += std::uint32_t(n_outer);
-  const SurfaceQuery all_query(all);
-  if (stats) stats->interface_seconds += interface_clock.seconds();
-  io.two_sided_from = std::uint32_t(n_outer);
-  fill_interior(all, lo, hi, all_query, sizing, io, grid, nodes, [&](double f) { progress("interior", f); });
+
+  progress("interior", 0);
+  // The calling thread and the helper (if any) take the blocks left, with more threads if
+  // io.threads asks for them.
+  lattice.work_on(std::max(1u, io.threads) - (helper.thread.joinable() ? 1 : 0));
+  if (helper.thread.joinable()) helper.thread.join();
+  progress("interior", 0.5);
+  lattice.finish(all ? *all : mesh, grid, nodes, [&](double f) { progress("interior", f); });
   // Interface nodes name no facet of the outer surface.
   for (std::size_t i = first; i < nodes.size_count(); ++i)
     if (nodes.kind[i] != NodeKind::interior) nodes.facet[i] = kNoFacet;
