@@ -29,6 +29,12 @@ class SineCache {
         if (m_.alive(std::uint32_t(t))) q_[t] = sine_of(m_, std::uint32_t(t));
     }, 65536, threads_);
   }
+  /// Hands the values over, one per tet slot (the cache is empty until assign): for a pass
+  /// that keeps them up to date itself, without allocating and filling an array of its own.
+  std::vector<double> take() {
+    q_.resize(m_.capacity(), std::numeric_limits<double>::infinity());
+    return std::move(q_);
+  }
   /// Takes `q` as the cache: tet_sine of every tet slot (+inf for dead slots), as refresh_all
   /// would compute it (a pass that kept such values up to date itself).
   void assign(std::vector<double> q) {
