@@ -648,6 +648,26 @@ TEST(NodePlacement, DeterministicForASeedAndDifferentAcrossSeeds) {
   EXPECT_FALSE(same(a, c));
 }
 
+/// A cylinder (radius 0.5, height 1, 48 sides) with a field of h_max `max_size` refined to
+/// `size` at (0.5, 0, 0.5), and its feature and surface nodes placed as node placement does:
+/// what the interior fill starts from.
+struct SampledCylinder {
+  SampledCylinder(double max_size, double size)
+      : field(point_zone_field(m.surface.mesh, max_size, size, {0.5, 0, 0.5})), grid(kGridLo, field.min_size()) {
+    grid.set_lipschitz(field.options().gradation);
+    place_edge_nodes(m.surface.mesh, m.features, field, 0.3, grid, surface_nodes);
+    SurfaceSamplingOptions so;
+    so.beta = 0.7;
+    place_surface_nodes(m.surface.mesh, field, so, grid, surface_nodes);
+  }
+  static constexpr double kGridLo[3] = {-2, -2, -2};
+  const Model m = cylinder(0.5, 1, 48);
+  const SurfaceQuery q{m.surface.mesh};
+  const SizingField field;
+  SpacingGrid grid;
+  NodeSet surface_nodes;
+};
+
 // The boundary layer decides its tries in batches of 65,536: their conflict tests against
 // the grid as it stood before the batch, their distance and side run on several threads, and
 // each kept try is then tested against the nodes its batch kept before it. This must give
@@ -655,17 +675,8 @@ TEST(NodePlacement, DeterministicForASeedAndDifferentAcrossSeeds) {
 // and no layer node closer to an earlier node than the interior rule allows (brute force
 // over all pairs; the batch test left out put nodes 0.0007 apart).
 TEST(InteriorFill, BoundaryLayerInBatchesIsTheSameOnAnyThreadCountAndKeepsItsSpacing) {
-  const Model m = cylinder(0.5, 1, 48);
-  const SurfaceQuery q(m.surface.mesh);
-  const SizingField field = point_zone_field(m.surface.mesh, 0.03, 0.012, {0.5, 0, 0.5});
-  const double glo[3] = {-2, -2, -2};
-  SpacingGrid grid(glo, field.min_size());
-  grid.set_lipschitz(field.options().gradation);
-  NodeSet surface_nodes;
-  place_edge_nodes(m.surface.mesh, m.features, field, 0.3, grid, surface_nodes);
-  SurfaceSamplingOptions so;
-  so.beta = 0.7;
-  place_surface_nodes(m.surface.mesh, field, so, grid, surface_nodes);
+  SampledCylinder c(0.03, 0.012);
+  const auto& [m, q, field, grid, surface_nodes] = c;
   InteriorFillOptions o;
   o.beta = 0.75;
   const std::size_t tries = surface_nodes.size_count() * std::size_t(o.layer_tries);
@@ -704,17 +715,8 @@ TEST(InteriorFill, BoundaryLayerInBatchesIsTheSameOnAnyThreadCountAndKeepsItsSpa
 // threads calling work() at any time gives fill_interior's nodes on one thread; finish()
 // before every block is generated (never started, or stopped) is an error, not fewer nodes.
 TEST(InteriorFill, LatticeGeneratedAheadOnAnyThreadsGivesTheSameNodes) {
-  const Model m = cylinder(0.5, 1, 48);
-  const SurfaceQuery q(m.surface.mesh);
-  const SizingField field = point_zone_field(m.surface.mesh, 0.05, 0.015, {0.5, 0, 0.5});
-  const double glo[3] = {-2, -2, -2};
-  SpacingGrid grid(glo, field.min_size());
-  grid.set_lipschitz(field.options().gradation);
-  NodeSet surface_nodes;
-  place_edge_nodes(m.surface.mesh, m.features, field, 0.3, grid, surface_nodes);
-  SurfaceSamplingOptions so;
-  so.beta = 0.7;
-  place_surface_nodes(m.surface.mesh, field, so, grid, surface_nodes);
+  SampledCylinder c(0.05, 0.015);
+  const auto& [m, q, field, grid, surface_nodes] = c;
   InteriorFillOptions o;
   o.beta = 0.75;
   o.threads = 1;
