@@ -799,6 +799,40 @@ TEST(ImproveInsert, SliverAndItsNeighboursBecomeAFanAroundANewNode) {
 // The certificate of ImproveTets::inside_ok_moved (a known-inside centroid carried along a
 // path clear of every facet box) never changes an answer: for moves small and large, some
 // through the surface, it agrees with the full ray-parity test.
+// The constructor checks every node reference on all threads and names the first bad one,
+// whichever thread found it (40,000 tets: two workers' ranges); each node's tet is the last
+// slot holding it, as a loop over the slots in order leaves it.
+TEST(ImproveTets, TheFirstBadNodeReferenceIsNamedAndEachNodesTetIsItsLast) {
+  NodeSet n = interior_nodes({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}});
+  std::vector<std::uint32_t> tets;
+  for (int k = 0; k < 40000; ++k) tets.insert(tets.end(), {0, 1, 2, 3});
+  auto message = [&](const std::vector<std::uint32_t>& t) {
+    try {
+      ImproveTets m(n, t, {});
+    } catch (const UsageError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  std::vector<std::uint32_t> bad = tets;
+  bad[4 * 30000 + 2] = 9;
+  EXPECT_NE(message(bad).find("tet 30000 references node 9 of 4"), std::string::npos) << message(bad);
+  bad[4 * 10000 + 1] = 7;
+  EXPECT_NE(message(bad).find("tet 10000 references node 7 of 4"), std::string::npos) << message(bad);
+  // A star's search starts from its node's tet: the last slot holding the node.
+  Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.06);
+  const ImproveTets m(p.mesh.nodes, p.mesh.tets, p.mesh.tet_region);
+  ASSERT_GT(m.capacity(), 40000u);
+  std::vector<std::uint32_t> last(p.mesh.nodes.size_count(), kImproveNone), star;
+  for (std::uint32_t t = 0; t < m.capacity(); ++t)
+    for (int i = 0; i < 4; ++i) last[m.v(t)[i]] = t;
+  for (std::uint32_t v = 0; v < last.size(); ++v) {
+    m.star(v, star);
+    ASSERT_FALSE(star.empty()) << "node " << v;
+    ASSERT_EQ(star.front(), last[v]) << "node " << v;
+  }
+}
+
 TEST(ImproveTets, InsideOkMovedAgreesWithTheFullTest) {
   Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.25);
   ImproveTets m(p.mesh.nodes, p.mesh.tets, p.mesh.tet_region);

@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <string>
+#include <thread>
 
 #include "core/error.h"
 #include "mesher/bucket_scatter.h"
@@ -36,41 +38,62 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
                          const std::vector<std::uint32_t>& region, const std::vector<std::uint32_t>* adjacency)
     : nodes_(&nodes) {
   const std::size_t nt = tets.size() / 4, np = nodes.size_count();
-  for (std::size_t i = 0; i < 4 * nt; ++i)
-    if (tets[i] >= np)
+  {  // the first reference past the nodes (each worker's first, then the least)
+    std::vector<std::size_t> bad(std::max(1u, std::thread::hardware_concurrency()), tets.size());
+    parallel_for(4 * nt, [&](std::size_t b, std::size_t e, unsigned w) {
+      for (std::size_t i = b; i < e && bad[w] == tets.size(); ++i)
+        if (tets[i] >= np) bad[w] = i;
+    }, 1 << 16);
+    const std::size_t i = *std::min_element(bad.begin(), bad.end());
+    if (i < tets.size())
       throw UsageError("improve_mesh: tet " + std::to_string(i / 4) + " references node " +
                        std::to_string(tets[i]) + " of " + std::to_string(np));
+  }
   // Slots in the order of each tet's smallest vertex id (a counting sort; stable): the tets
   // around a vertex then lie close together in memory when nearby nodes have nearby ids,
   // which the passes' star walks (and the input order, in insertion order) need.
   std::vector<std::uint32_t> order(nt);  // slot -> input tet
-  {
-    bucket_scatter(
-        nt, np,
-        [&](std::size_t t) {
-          return std::min(std::min(tets[4 * t], tets[4 * t + 1]), std::min(tets[4 * t + 2], tets[4 * t + 3]));
-        },
-        [&](std::size_t t, std::size_t at) { order[at] = std::uint32_t(t); });
-    tv_.resize(4 * nt);
-    region_.assign(nt, 0);
-    parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
-      for (std::size_t s = b; s < e; ++s) {
-        std::copy_n(&tets[4 * std::size_t(order[s])], 4, &tv_[4 * s]);
-        if (order[s] < region.size()) region_[s] = region[order[s]];
-      }
-    }, 1 << 16);
-  }
-  ta_.assign(4 * nt, kImproveNone);
-  version_.assign(nt, 0);
+  bucket_scatter(
+      nt, np,
+      [&](std::size_t t) {
+        return std::min(std::min(tets[4 * t], tets[4 * t + 1]), std::min(tets[4 * t + 2], tets[4 * t + 3]));
+      },
+      [&](std::size_t t, std::size_t at) { order[at] = std::uint32_t(t); });
+  tv_.resize(4 * nt);
+  ta_.resize(4 * nt);
+  region_.resize(nt);
+  version_.resize(nt);
+  mark_.resize(nt);
+  inside_known_.resize(nt);
+  const bool given = adjacency && adjacency->size() == 4 * nt;
+  parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t s = b; s < e; ++s) {
+      std::copy_n(&tets[4 * std::size_t(order[s])], 4, &tv_[4 * s]);
+      region_[s] = order[s] < region.size() ? region[order[s]] : 0;
+      version_[s] = mark_[s] = 0;
+      inside_known_[s] = 0;
+      if (!given) std::fill_n(&ta_[4 * s], 4, kImproveNone);
+    }
+  }, 1 << 16);
+  // Each node's tet: the last slot holding it (the largest), as a loop over the slots in
+  // order would leave it.
   vtet_.assign(np, kImproveNone);
-  mark_.assign(nt, 0);
-  inside_known_.assign(nt, 0);
-  for (std::size_t t = 0; t < nt; ++t)
-    for (int i = 0; i < 4; ++i) vtet_[tv_[4 * t + i]] = std::uint32_t(t);
-  if (adjacency && adjacency->size() == 4 * nt) {
+  parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t t = b; t < e; ++t)
+      for (int i = 0; i < 4; ++i) {
+        std::atomic_ref<std::uint32_t> at(vtet_[tv_[4 * t + i]]);
+        std::uint32_t now = at.load(std::memory_order_relaxed);
+        while ((now == kImproveNone || now < t) &&
+               !at.compare_exchange_weak(now, std::uint32_t(t), std::memory_order_relaxed)) {
+        }
+      }
+  }, 1 << 16);
+  if (given) {
     // The given adjacency, in slots (a slot's vertices are its tet's, in the same order).
     std::vector<std::uint32_t> slot_of(nt);
-    for (std::size_t s = 0; s < nt; ++s) slot_of[order[s]] = std::uint32_t(s);
+    parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
+      for (std::size_t s = b; s < e; ++s) slot_of[order[s]] = std::uint32_t(s);
+    }, 1 << 16);
     parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
       for (std::size_t s = b; s < e; ++s)
         for (int i = 0; i < 4; ++i) {
@@ -441,31 +464,47 @@ bool ImproveTets::open_edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t
 
 std::size_t ImproveTets::write_back(VolumeMesh& mesh) const {
   const std::size_t cap = tv_.size() / 4, np = nodes_->size_count();
-  std::vector<std::uint32_t> new_id(np, kImproveNone), tet_id(cap, kImproveNone);
-  std::uint32_t nn = 0, nt = 0;
-  for (std::size_t t = 0; t < cap; ++t) {
-    if (tv_[4 * t] == kImproveNone) continue;
-    tet_id[t] = nt++;
-    for (int i = 0; i < 4; ++i)
-      if (new_id[tv_[4 * t + i]] == kImproveNone) new_id[tv_[4 * t + i]] = 0;  // used
-  }
-  for (std::size_t i = 0; i < np; ++i)
-    if (new_id[i] != kImproveNone) new_id[i] = nn++;
+  // Live slots are numbered in slot order, nodes in id order. The slots go in fixed chunks on
+  // all threads: each chunk's live count (then its first number), its boundary faces, and the
+  // nodes it uses; the results are those of one loop over the slots.
+  constexpr std::size_t kChunk = std::size_t(1) << 16;
+  const std::size_t chunks = (cap + kChunk - 1) / kChunk;
   // Boundary faces (in the old numbering): key, tet, outward vertices.
   struct BFace {
     Key key;
     std::uint32_t tet;
     std::array<std::uint32_t, 3> out;
   };
-  std::vector<BFace> now;
-  for (std::size_t t = 0; t < cap; ++t) {
-    if (tv_[4 * t] == kImproveNone) continue;
-    for (int i = 0; i < 4; ++i)
-      if (ta_[4 * t + i] == kImproveNone) {
+  std::vector<std::uint32_t> new_id(np, kImproveNone), first(chunks + 1, 0);
+  std::vector<std::vector<BFace>> faces(chunks);
+  parallel_for(chunks, [&](std::size_t cb, std::size_t ce, unsigned) {
+    for (std::size_t c = cb; c < ce; ++c) {
+      std::uint32_t live = 0;
+      for (std::size_t t = c * kChunk; t < std::min(cap, (c + 1) * kChunk); ++t) {
+        if (tv_[4 * t] == kImproveNone) continue;
         const std::uint32_t* v = &tv_[4 * t];
-        now.push_back({face_key(v, i), tet_id[t], {v[kTetFace[i][0]], v[kTetFace[i][1]], v[kTetFace[i][2]]}});
+        for (int i = 0; i < 4; ++i) {
+          std::atomic_ref<std::uint32_t>(new_id[v[i]]).store(0, std::memory_order_relaxed);  // used
+          if (ta_[4 * t + i] == kImproveNone)  // (live: the chunk's number, made global below)
+            faces[c].push_back({face_key(v, i), live, {v[kTetFace[i][0]], v[kTetFace[i][1]], v[kTetFace[i][2]]}});
+        }
+        ++live;
       }
-  }
+      first[c + 1] = live;
+    }
+  }, 1);
+  for (std::size_t c = 0; c < chunks; ++c) first[c + 1] += first[c];
+  const std::uint32_t nt = first[chunks];
+  std::uint32_t nn = 0;
+  for (std::size_t i = 0; i < np; ++i)
+    if (new_id[i] != kImproveNone) new_id[i] = nn++;
+  std::vector<BFace> now;
+  for (std::size_t c = 0; c < chunks; ++c)
+    for (BFace f : faces[c]) {
+      f.tet += first[c];
+      now.push_back(f);
+    }
+  std::vector<std::vector<BFace>>().swap(faces);
   std::sort(now.begin(), now.end(), [](const BFace& a, const BFace& b) { return a.key < b.key; });
   std::vector<std::uint8_t> used(now.size(), 0);
   std::vector<std::uint32_t> boundary, boundary_tet;
@@ -488,15 +527,22 @@ std::size_t ImproveTets::write_back(VolumeMesh& mesh) const {
     for (int j = 0; j < 3; ++j) boundary.push_back(new_id[now[x].out[j]]);
     boundary_tet.push_back(now[x].tet);
   }
-  // Tets and regions.
-  std::vector<std::uint32_t> tets, region;
-  tets.reserve(4 * std::size_t(nt));
-  region.reserve(nt);
-  for (std::size_t t = 0; t < cap; ++t) {
-    if (tv_[4 * t] == kImproveNone) continue;
-    for (int i = 0; i < 4; ++i) tets.push_back(new_id[tv_[4 * t + i]]);
-    region.push_back(region_[t]);
-  }
+  // Tets and regions, on all threads, into the mesh's own arrays (the tets the pass started
+  // from: their pages are already there, and no other array of 16 bytes a tet is made).
+  std::vector<std::uint32_t>& tets = mesh.tets;
+  std::vector<std::uint32_t>& region = mesh.tet_region;
+  tets.resize(4 * std::size_t(nt));
+  region.resize(nt);
+  parallel_for(chunks, [&](std::size_t cb, std::size_t ce, unsigned) {
+    for (std::size_t c = cb; c < ce; ++c) {
+      std::size_t k = first[c];
+      for (std::size_t t = c * kChunk; t < std::min(cap, (c + 1) * kChunk); ++t) {
+        if (tv_[4 * t] == kImproveNone) continue;
+        for (int i = 0; i < 4; ++i) tets[4 * k + i] = new_id[tv_[4 * t + i]];
+        region[k++] = region_[t];
+      }
+    }
+  }, 1);
   // Nodes (compacted in id order).
   NodeSet out;
   out.points.xyz.reserve(3 * std::size_t(nn));
@@ -504,9 +550,7 @@ std::size_t ImproveTets::write_back(VolumeMesh& mesh) const {
     if (new_id[i] != kImproveNone)
       out.push_back(nodes_->points.p(std::uint32_t(i)), nodes_->kind[i], nodes_->facet[i],
                     nodes_->size[i]);
-  mesh.tets = std::move(tets);
   std::vector<std::uint32_t>().swap(mesh.tet_adj);  // the tets changed
-  mesh.tet_region = std::move(region);
   mesh.boundary = std::move(boundary);
   mesh.boundary_tet = std::move(boundary_tet);
   mesh.nodes = std::move(out);
