@@ -334,7 +334,7 @@ struct InteriorLattice::Impl {
   const SurfaceQuery& query;
   const SizingField& sizing;
   Filler F;
-  double lo[3], hi[3];
+  double lo[3];  // the box's low corner: the root blocks' origin
   std::int64_t nb[3];
   std::size_t nroots = 0;
   std::vector<Filler::Local> locals;
@@ -342,18 +342,16 @@ struct InteriorLattice::Impl {
   std::mutex error_mutex;
   std::exception_ptr error;
 
-  Impl(const double* l, const double* h, const SurfaceQuery& q, const SizingField& s,
-       const InteriorFillOptions& o)
+  Impl(const double* l, const SurfaceQuery& q, const SizingField& s, const InteriorFillOptions& o)
       : options(o), query(q), sizing(s),
         F{q, s, options, s.max_size(), s.min_size(), 0, std::log(o.rho), 0} {
     std::copy_n(l, 3, lo);
-    std::copy_n(h, 3, hi);
   }
 };
 
 InteriorLattice::InteriorLattice(const double* lo, const double* hi, const SurfaceQuery& query,
                                  const SizingField& sizing, const InteriorFillOptions& options)
-    : impl_(std::make_unique<Impl>(lo, hi, query, sizing, options)) {
+    : impl_(std::make_unique<Impl>(lo, query, sizing, options)) {
   if (!(options.kappa > 0) || !(options.rho > 1) || !(options.beta > 0) ||
       !(options.clearance >= 0))
     throw UsageError("interior fill: kappa, beta must be > 0, rho > 1, clearance >= 0");
@@ -492,6 +490,5 @@ InteriorFillStats fill_interior(const SurfaceMesh& surface, const double* lo, co
   if (progress) progress(0.5);
   return lattice.finish(surface, grid, nodes, progress);
 }
-
 
 }  // namespace kdmesh

@@ -151,9 +151,9 @@ NodeSet place_nodes(const Domain& domain, const FeatureEdges& features,
   if (helper.thread.joinable()) helper.thread.join();
   progress("interior", 0.5);
   lattice.finish(all ? *all : mesh, grid, nodes, [&](double f) { progress("interior", f); });
-  // Interface nodes name no facet of the outer surface.
-  for (std::size_t i = first; i < nodes.size_count(); ++i)
-    if (nodes.kind[i] != NodeKind::interior) nodes.facet[i] = kNoFacet;
+  if (!ifc.empty())  // interface nodes name no facet of the outer surface
+    for (std::size_t i = first; i < nodes.size_count(); ++i)
+      if (nodes.kind[i] != NodeKind::interior) nodes.facet[i] = kNoFacet;
   return nodes;
 }
 
