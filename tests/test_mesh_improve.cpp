@@ -28,6 +28,8 @@
 #include "mesher/placement/node_placement.h"
 #include "mesher/delaunay/predicates.h"
 #include "mesher/tet_quality.h"
+#include "mesher/surface/region_query.h"
+#include "mesher/surface/surface_bodies.h"
 #include "mesher/surface/surface_prepare.h"
 #include "mesher/volume/volume_mesh.h"
 #include "sizing/features.h"
@@ -441,6 +443,26 @@ TEST(ImproveFlips, FaceRemovalRefusesWhenTheNewEdgeMissesTheFace) {
   FlipCandidate cand;
   EXPECT_FALSE(face_removal(m, 0, index_in(m.v(0), 3), cand));
   EXPECT_FALSE(face_removal(m, 0, index_in(m.v(0), 0), cand));  // a boundary face
+}
+
+// The flip stage passes the better of the two tets' sine and its best candidate so far as a
+// floor: a face removal whose worst new tet is not above it is refused, the rest unevaluated.
+TEST(ImproveFlips, FaceRemovalRefusesWhatCannotBeatItsFloor) {
+  NodeSet n = interior_nodes({{0, 0, 0}, {3, 0, 0}, {0, 3, 0}, {1, 1, 1}, {1, 1, -1}});
+  std::vector<std::uint32_t> tets = positive(n, 0, 1, 2, 3);
+  const auto t2 = positive(n, 0, 1, 2, 4);
+  tets.insert(tets.end(), t2.begin(), t2.end());
+  ImproveTets m(n, tets, {0, 0});
+  const int i = index_in(m.v(0), 3);
+  FlipCandidate cand;
+  ASSERT_TRUE(face_removal(m, 0, i, cand));
+  const double q = cand.q_new;
+  ASSERT_GT(q, 0);
+  FlipCandidate at, below;
+  EXPECT_FALSE(face_removal(m, 0, i, at, nullptr, true, q));
+  ASSERT_TRUE(face_removal(m, 0, i, below, nullptr, true, std::nextafter(q, 0.0)));
+  EXPECT_EQ(below.q_new, q);
+  EXPECT_EQ(below.fresh, cand.fresh);
 }
 
 // 3-2 flip: the three tets around edge pq (the 2-3 flip's result) go back to the two tets
@@ -1218,4 +1240,93 @@ TEST(MeshImprove, BadOptionsThrow) {
 }
 
 }  // namespace
+
+namespace {
+
+/// Two unit boxes touching on x = 1, meshed at h: bodies a (x < 1) and b, with their regions.
+struct TwoBoxes {
+  PreparedSurface surface;
+  std::unique_ptr<SurfaceQuery> query;
+  std::unique_ptr<RegionQuery> regions;
+  SizingField sizing;
+  VolumeMesh mesh;
+};
+
+std::unique_ptr<TwoBoxes> two_touching_boxes(double h) {
+  auto b = std::make_unique<TwoBoxes>();
+  std::vector<PreparedSurface> parts;
+  parts.push_back(boxes({{0, 0, 0, 1, 1, 1}}));
+  parts.push_back(boxes({{1, 0, 0, 2, 1, 1}}));
+  b->surface = join_bodies(std::move(parts), {"a", "b"}, {"a.stl", "b.stl"});
+  b->query = std::make_unique<SurfaceQuery>(b->surface.mesh);
+  b->regions = std::make_unique<RegionQuery>(b->surface);
+  SizingOptions so;
+  so.max_size = h;
+  b->sizing = build_sizing_field(b->surface.mesh, so);
+  const Domain d{b->surface, *b->query, b->sizing, b->regions.get()};
+  PlacementOptions po;
+  po.interface_feature_angle = 30;
+  const FeatureEdges features = detect_sharp_edges(b->surface.mesh, 30, interface_rim_edges(b->surface));
+  b->mesh = mesh_volume(d, place_nodes(d, features, po));
+  return b;
+}
+
+}  // namespace
+
+// The flip stage tests its choices' new tets against the regions on its workers
+// (fresh_in_region), not in replace(): the same answers as the centroid test of each tet.
+TEST(ImproveTets, FreshInRegionIsTheCentroidTestOfEachTetWithASurfaceVertex) {
+  const auto b = two_touching_boxes(0.2);
+  ASSERT_FALSE(b->surface.interfaces.empty());
+  VolumeMesh vm = b->mesh;
+  ImproveTets m(vm.nodes, vm.tets, vm.tet_region);
+  std::size_t tested = 0;
+  for (std::uint32_t t = 0; t < m.capacity(); ++t) {
+    const std::vector<std::uint32_t> fresh(m.v(t), m.v(t) + 4);
+    EXPECT_TRUE(m.fresh_in_region(fresh, 1 - m.region(t)));  // no region query: no test
+  }
+  m.region_query = b->regions.get();
+  for (std::uint32_t t = 0; t < m.capacity(); ++t) {
+    const std::vector<std::uint32_t> fresh(m.v(t), m.v(t) + 4);
+    bool surface = false;
+    double c[3] = {0, 0, 0};
+    for (int i = 0; i < 4; ++i) {
+      surface = surface || vm.nodes.kind[fresh[i]] != NodeKind::interior;
+      for (int k = 0; k < 3; ++k) c[k] += m.p(fresh[i])[k] / 4;
+    }
+    for (const std::uint32_t r : {0u, 1u})
+      EXPECT_EQ(m.fresh_in_region(fresh, r), !surface || b->regions->in_body(c, r)) << "tet " << t;
+    if (!surface) continue;
+    ++tested;
+    EXPECT_TRUE(m.fresh_in_region(fresh, m.region(t))) << "tet " << t;
+    EXPECT_FALSE(m.fresh_in_region(fresh, 1 - m.region(t))) << "tet " << t;
+  }
+  EXPECT_GT(tested, 100u);
+}
+
+// With touching bodies the flip stage's choices carry their region test from the workers; the
+// flips are still those of one thread, and every tet stays in its body.
+TEST(FlipPass, TwoBodiesOnSeveralThreadsMakeTheOneThreadFlips) {
+  const auto b = two_touching_boxes(0.15);
+  auto run = [&](unsigned threads) {
+    VolumeMesh vm = b->mesh;
+    ImproveTets m(vm.nodes, vm.tets, vm.tet_region);
+    m.inside_query = b->query.get();
+    m.region_query = b->regions.get();
+    m.certify_inside();
+    SineCache cache(m, threads);
+    FlipCounts counts;
+    EXPECT_GT(flip_pass(m, cache, deg_to_sine(30), 10, counts, nullptr, threads), 100u);
+    m.write_back(vm);
+    return vm;
+  };
+  const VolumeMesh one = run(1);
+  for (std::size_t t = 0; t < one.num_tets(); ++t) {
+    double x = 0;
+    for (int i = 0; i < 4; ++i) x += one.nodes.points.p(one.tets[4 * t + i])[0] / 4;
+    EXPECT_EQ(one.tet_region[t], x > 1 ? 1u : 0u) << "tet " << t;  // bodies in list order
+  }
+  for (const unsigned threads : {2u, 3u}) EXPECT_EQ(run(threads).tets, one.tets) << threads << " threads";
+}
+
 }  // namespace kdmesh

@@ -28,6 +28,9 @@ constexpr std::size_t kBatch = 64;
 struct FlipChoice {
   FlipCandidate best;
   bool have = false, is_edge = false, is_boundary = false;
+  /// With touching bodies: the new tets stay in the cavity's body (ImproveTets::replace's
+  /// region test, made here on the workers; positions and regions do not change in the stage).
+  bool in_region = true;
   std::uint32_t star_read[6] = {};
   int stars = 0;
 };
@@ -41,7 +44,9 @@ void choose(const ImproveTets& m, std::uint32_t t, const double* sines, int max_
   best.q_new = -1;
   best.q_old = 0;
   out.have = out.is_edge = out.is_boundary = false;
+  out.in_region = true;
   out.stars = 0;
+  m.prefetch_around(t);
   const std::uint32_t* v = m.v(t);
   // Validity (exact orientation, inside tests) is checked last, only for a candidate that
   // would become the best: the same choice as checking every candidate, for less work.
@@ -52,25 +57,31 @@ void choose(const ImproveTets& m, std::uint32_t t, const double* sines, int max_
       std::swap(best, cand);
       out.have = out.is_edge = true;
     }
+  // A face removal is taken only if it improves on the two tets and on the best so far: its
+  // evaluation stops at the first new tet that cannot.
   for (int i = 0; i < 4; ++i)
-    if (face_removal(m, t, i, cand, sines, false) && cand.improves() &&
-        (!out.have || cand.q_new > best.q_new) && flip_valid(m, cand)) {
+    if (m.adj(t, i) != kImproveNone &&
+        face_removal(m, t, i, cand, sines, false,
+                     std::max(out.have ? best.q_new : 0.0,
+                              std::min(sines[t], sines[m.adj(t, i) >> 2]))) &&
+        cand.improves() && (!out.have || cand.q_new > best.q_new) && flip_valid(m, cand)) {
       std::swap(best, cand);
       out.have = true;
       out.is_edge = false;
     }
-  if (!boundary) return;
-  for (const auto& e : kTetEdge) {
-    std::uint32_t star = kImproveNone;
-    const bool found = boundary_edge_removal(m, t, v[e[0]], v[e[1]], max_ring, *boundary, cand,
-                                             out.have ? best.q_new : -1, sines, &star);
-    if (star != kImproveNone) out.star_read[out.stars++] = star;
-    if (found && cand.improves() && (!out.have || cand.q_new > best.q_new)) {
-      std::swap(best, cand);
-      out.have = out.is_boundary = true;
-      out.is_edge = false;
+  if (boundary)
+    for (const auto& e : kTetEdge) {
+      std::uint32_t star = kImproveNone;
+      const bool found = boundary_edge_removal(m, t, v[e[0]], v[e[1]], max_ring, *boundary, cand,
+                                               out.have ? best.q_new : -1, sines, &star);
+      if (star != kImproveNone) out.star_read[out.stars++] = star;
+      if (found && cand.improves() && (!out.have || cand.q_new > best.q_new)) {
+        std::swap(best, cand);
+        out.have = out.is_boundary = true;
+        out.is_edge = false;
+      }
     }
-  }
+  if (out.have) out.in_region = m.fresh_in_region(best.fresh, m.region(best.old[0]));
 }
 
 using Entry = std::tuple<double, std::uint32_t, std::uint32_t>;  // quality, tet, version
@@ -199,7 +210,8 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
       if (!c.have) continue;
       for (std::uint32_t o : c.best.old)
         for (int i = 0; i < 4; ++i) touched[m.v(o)[i]] = stamp;
-      if (!m.replace(c.best.old, c.best.fresh, &created, c.is_boundary)) continue;
+      if (!c.in_region || !m.replace(c.best.old, c.best.fresh, &created, c.is_boundary, true))
+        continue;
       ++ops;
       ++(c.is_boundary ? counts.boundary_flips : c.is_edge ? counts.edge_removals : counts.face_removals);
       for (std::uint32_t o : c.best.old) cache.refresh(o);

@@ -148,7 +148,7 @@ bool boundary_edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t 
 }
 
 bool face_removal(const ImproveTets& m, std::uint32_t t, int i, FlipCandidate& out,
-                  const double* sines, bool validate) {
+                  const double* sines, bool validate, double floor) {
   out.old.clear();
   out.fresh.clear();
   out.q_new = -1;
@@ -163,11 +163,16 @@ bool face_removal(const ImproveTets& m, std::uint32_t t, int i, FlipCandidate& o
   out.q_old = sines ? std::min(sines[t], sines[u]) : std::min(sine_of(m, t), sine_of(m, u));
   out.fresh = {x, y, q, p, y, z, q, p, z, x, q, p};
   double qn = std::numeric_limits<double>::infinity();
-  for (std::size_t k = 0; k < out.fresh.size(); k += 4)
+  const double cut = std::max(floor, 0.0);
+  for (std::size_t k = 0; k < out.fresh.size(); k += 4) {
     qn = std::min(qn, tet_sine(m.p(out.fresh[k]), m.p(out.fresh[k + 1]), m.p(out.fresh[k + 2]),
                                m.p(out.fresh[k + 3])));
+    if (!(qn > cut)) {
+      out.q_new = qn;
+      return false;
+    }
+  }
   out.q_new = qn;
-  if (!(qn > 0)) return false;
   return !validate || flip_valid(m, out);
 }
 

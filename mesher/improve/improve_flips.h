@@ -50,9 +50,10 @@ bool boundary_edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t 
 /// Face removal: face i of tet t (opposite p) shared with tet u (opposite q) replaced by the
 /// three tets around the new edge pq (a 2-3 flip). False on a boundary face or if pq does not
 /// cross the face's interior (a new tet would not be valid).
-/// `sines` and `validate` as for edge_removal.
+/// `sines` and `validate` as for edge_removal. Also false, as soon as one is found, if a new
+/// tet's tet_sine is not above `floor` (the rest are not evaluated).
 bool face_removal(const ImproveTets& m, std::uint32_t t, int i, FlipCandidate& out,
-                  const double* sines = nullptr, bool validate = true);
+                  const double* sines = nullptr, bool validate = true, double floor = 0);
 
 /// Every new tet of `c` exactly positively oriented, not flat, and inside the solid where
 /// ImproveTets::inside_ok asks (the check edge_removal and face_removal make by default).

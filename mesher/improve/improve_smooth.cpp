@@ -64,6 +64,8 @@ class VertexStar {
     if (on_surface_ && (kind == NodeKind::corner || !ctx.surface || !ctx.query)) return false;
     m.star(v, star_);
     if (star_.empty()) return false;
+    for (std::uint32_t t : star_)  // (the positions are read below and in every evaluation)
+      for (int k = 0; k < 4; ++k) __builtin_prefetch(m.p(m.v(t)[k]));
     st_.clear();
     bfaces_.clear();
     bnormal_.clear();

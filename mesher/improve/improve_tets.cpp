@@ -208,9 +208,19 @@ void ImproveTets::certify_inside() {
     if (side[k] == 1) inside_known_[slots[k]] = 1;
 }
 
+bool ImproveTets::fresh_in_region(const std::vector<std::uint32_t>& fresh, std::uint32_t r) const {
+  if (!region_query) return true;  // touching bodies: every new tet's centroid in the body
+  for (std::size_t k = 0; k < fresh.size(); k += 4) {
+    const double* q[4] = {p(fresh[k]), p(fresh[k + 1]), p(fresh[k + 2]), p(fresh[k + 3])};
+    if (!region_ok(&fresh[k], q, r)) return false;
+  }
+  return true;
+}
+
 bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
                           const std::vector<std::uint32_t>& fresh,
-                          std::vector<std::uint32_t>* created, bool boundary_may_change) {
+                          std::vector<std::uint32_t>* created, bool boundary_may_change,
+                          bool regions_known) {
   if (++mark_stamp_ == 0) {
     std::fill(mark_.begin(), mark_.end(), 0);
     mark_stamp_ = 1;
@@ -235,12 +245,7 @@ bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
       e.push_back({face_key(&tv_[4 * std::size_t(t)], i), r, 0});
     }
   const std::size_t nn = fresh.size() / 4;
-  if (region_query)  // touching bodies: every new tet's centroid in the cavity's body
-    for (std::size_t k = 0; k < nn; ++k) {
-      const double* p[4] = {this->p(fresh[4 * k]), this->p(fresh[4 * k + 1]), this->p(fresh[4 * k + 2]),
-                            this->p(fresh[4 * k + 3])};
-      if (!region_ok(&fresh[4 * k], p, old.empty() ? 0 : region_[old[0]])) return false;
-    }
+  if (!regions_known && !fresh_in_region(fresh, old.empty() ? 0 : region_[old[0]])) return false;
   for (std::size_t k = 0; k < nn; ++k)
     for (int i = 0; i < 4; ++i) e.push_back({face_key(&fresh[4 * k], i), std::uint32_t(4 * k + i), 1});
   // (The keys compared field by field: std::array's == is a memcmp call.)
@@ -365,6 +370,10 @@ void ImproveTets::star(std::uint32_t v, std::vector<std::uint32_t>& out) const {
       if (seen[h] == kEmpty) {
         seen[h] = u;
         out.push_back(u);
+        // Read when its turn in the walk comes: by then the lines are there, the waits for
+        // the tets found meanwhile overlapping instead of coming one after another.
+        __builtin_prefetch(&tv_[4 * std::size_t(u)]);
+        __builtin_prefetch(&ta_[4 * std::size_t(u)]);
         return true;
       }
     }
@@ -460,6 +469,37 @@ bool ImproveTets::open_edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t
       return true;
     }
   }
+}
+
+void ImproveTets::prefetch_around(std::uint32_t t) const {
+  const std::uint32_t* tv = tv_.data();
+  const std::uint32_t* ta = ta_.data();
+  const std::uint32_t* v = tv + 4 * std::size_t(t);
+  std::uint32_t near[4];
+  int n = 0;
+  for (int i = 0; i < 4; ++i) {
+    __builtin_prefetch(p(v[i]));
+    const std::uint32_t r = ta[4 * std::size_t(t) + i];
+    if (r == kImproveNone) continue;
+    near[n++] = r;
+    __builtin_prefetch(tv + 4 * std::size_t(r >> 2));
+    __builtin_prefetch(ta + 4 * std::size_t(r >> 2));
+  }
+  // Each level's loads wait for the one before, all of its lines at once.
+  std::uint32_t far[12];
+  int f = 0;
+  for (int k = 0; k < n; ++k) {
+    const std::uint32_t u = near[k] >> 2;
+    __builtin_prefetch(p(tv[4 * std::size_t(u) + (near[k] & 3)]));  // u's vertex off t
+    for (int j = 0; j < 4; ++j) {
+      const std::uint32_t r = ta[4 * std::size_t(u) + j];
+      if (j == int(near[k] & 3) || r == kImproveNone) continue;
+      far[f++] = r;
+      __builtin_prefetch(tv + 4 * std::size_t(r >> 2));
+      __builtin_prefetch(ta + 4 * std::size_t(r >> 2));
+    }
+  }
+  for (int k = 0; k < f; ++k) __builtin_prefetch(p(tv[4 * std::size_t(far[k] >> 2) + (far[k] & 3)]));
 }
 
 std::size_t ImproveTets::write_back(VolumeMesh& mesh) const {

@@ -63,8 +63,14 @@ class ImproveTets {
   /// also go unmatched (it is no longer a face) and so may a new face (it becomes a boundary
   /// face): the caller has checked the new boundary. Returns false (and changes nothing) if
   /// the faces do not match. New tet ids are written to *created (if given).
+  /// With `regions_known`, the caller has found fresh_in_region(fresh, region of old[0]) true
+  /// (the flip stage tests it on its worker threads).
   bool replace(const std::vector<std::uint32_t>& old, const std::vector<std::uint32_t>& fresh,
-               std::vector<std::uint32_t>* created = nullptr, bool boundary_may_change = false);
+               std::vector<std::uint32_t>* created = nullptr, bool boundary_may_change = false,
+               bool regions_known = false);
+  /// region_ok for every tet of `fresh` (4 ids per tet) in region r: replace()'s test that new
+  /// tets stay in the cavity's body. Thread-safe (reads only).
+  bool fresh_in_region(const std::vector<std::uint32_t>& fresh, std::uint32_t r) const;
 
   /// Appends an interior node at p (target size h) to the node set and returns its id; it is
   /// in no tet until a replace() uses it.
@@ -92,6 +98,10 @@ class ImproveTets {
   /// if the edge is not on the boundary (the ring closes) or its ring is longer than max_ring.
   bool open_edge_ring(std::uint32_t t, std::uint32_t a, std::uint32_t b, int max_ring,
                       std::vector<std::uint32_t>& ring, std::vector<std::uint32_t>& tets) const;
+  /// Starts loading what the rings of t's edges read (a hint; changes nothing): the tets
+  /// across t's faces and the tets across theirs, which hold most of those rings, and the
+  /// positions of their vertices. Without it each step around a ring waits for memory in turn.
+  void prefetch_around(std::uint32_t t) const;
 
   /// The solid's surface, when set: a tet the pass creates (or changes by moving a vertex) with
   /// a vertex on the surface must have its centroid strictly inside the solid (exact ray
