@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/parallel_collect.h"
 #include "core/parallel_for.h"
 #include "mesher/tet_quality.h"
 #include "mesher/volume/boundary_faces.h"
@@ -33,20 +34,20 @@ std::vector<std::uint32_t> label_regions(const Triangulation& tri, const NodeSet
   };
   std::vector<std::uint32_t> label(n, kNoRegion);
   std::vector<std::uint8_t> verified(n, 0);
-  std::vector<std::uint32_t> wave;
-  for (std::size_t t = 0; t < n; ++t) {
-    if (!inside[t]) continue;
+  // (The scans over every tet below run on all threads; the lists come out in tet order.)
+  std::vector<std::uint32_t> wave = parallel_collect(n, [&](std::size_t t) {
+    if (!inside[t]) return false;
     std::int32_t r = -1;
     bool mixed = false;
     for (int i = 0; i < 4; ++i) {
-      const std::int32_t x = node_region[tri.v(t, i)];
+      const std::int32_t x = node_region[tri.v(std::uint32_t(t), i)];
       if (x < 0) continue;
       mixed = mixed || (r >= 0 && x != r);
       r = r < 0 ? x : r;
     }
     if (r >= 0 && !mixed) label[t] = std::uint32_t(r);
-    else wave.push_back(std::uint32_t(t));
-  }
+    return !(r >= 0 && !mixed);
+  });
   // The first wave: tets without a body yet, then those next to a tet of another body.
   std::vector<std::int32_t> answer(wave.size());
   parallel_for(wave.size(), [&](std::size_t b, std::size_t e, unsigned) {
@@ -58,17 +59,14 @@ std::vector<std::uint32_t> label_regions(const Triangulation& tri, const NodeSet
     // On an interface or outside by rounding: the body of a neighbour decides below.
     label[wave[k]] = answer[k] >= 0 ? std::uint32_t(answer[k]) : kNoRegion - 1;
   }
-  wave.clear();
-  for (std::size_t t = 0; t < n; ++t) {
-    if (!inside[t] || verified[t]) continue;
+  wave = parallel_collect(n, [&](std::size_t t) {
+    if (!inside[t] || verified[t]) return false;
     for (int i = 0; i < 4; ++i) {
-      const std::uint32_t u = tri.adj(t, i) >> 2;
-      if (inside[u] && label[u] != label[t]) {
-        wave.push_back(std::uint32_t(t));
-        break;
-      }
+      const std::uint32_t u = tri.adj(std::uint32_t(t), i) >> 2;
+      if (inside[u] && label[u] != label[t]) return true;
     }
-  }
+    return false;
+  });
   while (!wave.empty()) {
     for (std::uint32_t t : wave) verified[t] = 1;
     answer.assign(wave.size(), 0);
@@ -91,10 +89,13 @@ std::vector<std::uint32_t> label_regions(const Triangulation& tri, const NodeSet
     }
     wave.swap(next);
   }
-  // Tets whose own centroid lies on a body's surface (flat slivers) take a neighbour's body.
-  for (bool changed = true; changed;) {
+  // Tets whose own centroid lies on a body's surface (flat slivers) take a neighbour's body,
+  // in tet order, pass after pass (only they are visited: the others would be skipped).
+  const std::vector<std::uint32_t> flat =
+      parallel_collect(n, [&](std::size_t t) { return label[t] == kNoRegion - 1; });
+  for (bool changed = !flat.empty(); changed;) {
     changed = false;
-    for (std::size_t t = 0; t < n; ++t) {
+    for (const std::uint32_t t : flat) {
       if (label[t] != kNoRegion - 1) continue;
       for (int i = 0; i < 4; ++i) {
         const std::uint32_t u = tri.adj(t, i) >> 2;
@@ -106,7 +107,7 @@ std::vector<std::uint32_t> label_regions(const Triangulation& tri, const NodeSet
       }
     }
   }
-  for (std::size_t t = 0; t < n; ++t)
+  for (const std::uint32_t t : flat)
     if (label[t] == kNoRegion - 1) label[t] = 0;
   if (queries) *queries += asked;
   return label;
@@ -114,14 +115,22 @@ std::vector<std::uint32_t> label_regions(const Triangulation& tri, const NodeSet
 
 InterfaceFaces interface_faces(const Triangulation& tri, const std::vector<std::uint32_t>& label) {
   InterfaceFaces out;
-  const std::size_t n = tri.num_tets();
-  for (std::size_t t = 0; t < n; ++t) {
-    if (label[t] == kNoRegion) continue;
+  auto between = [&](std::uint32_t t, int i) {  // face i of t is an interface face, listed by t
+    const std::uint32_t u = tri.adj(t, i) >> 2;
+    return label[u] != kNoRegion && label[u] > label[t];
+  };
+  // The tets with such a face, found on all threads (in tet order), then their faces.
+  const std::vector<std::uint32_t> tets = parallel_collect(tri.num_tets(), [&](std::size_t t) {
+    if (label[t] == kNoRegion) return false;
+    for (int i = 0; i < 4; ++i)
+      if (between(std::uint32_t(t), i)) return true;
+    return false;
+  });
+  for (const std::uint32_t t : tets) {
     for (int i = 0; i < 4; ++i) {
-      const std::uint32_t u = tri.adj(t, i) >> 2;
-      if (label[u] == kNoRegion || label[u] <= label[t]) continue;
+      if (!between(t, i)) continue;
       for (int j = 0; j < 3; ++j) out.verts.push_back(tri.v(t, kTetFace[i][j]));
-      out.tet.push_back(std::uint32_t(t));
+      out.tet.push_back(t);
       out.face.push_back(std::uint8_t(i));
     }
   }
