@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <queue>
 #include <thread>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "mesher/improve/improve_flips.h"
+#include "mesher/improve/improve_quality.h"
 #include "mesher/worker_team.h"
 
 namespace kdmesh {
@@ -22,6 +24,8 @@ namespace {
 
 /// Tets taken from the queue at once when several threads choose flips.
 constexpr std::size_t kBatch = 64;
+/// How far ahead in the sorted first entries a tet's lines are requested.
+constexpr std::size_t kAhead = 16;
 
 /// A tet's choice: its best improving flip on the mesh as it stood, and the vertices beyond
 /// the tet's own whose stars the choice read (boundary edge removals read a ring end's star).
@@ -31,6 +35,9 @@ struct FlipChoice {
   /// With touching bodies: the new tets stay in the cavity's body (ImproveTets::replace's
   /// region test, made here on the workers; positions and regions do not change in the stage).
   bool in_region = true;
+  /// tet_sine of each new tet of `best`, as SineCache::refresh will find it once they are made
+  /// (computed on the workers).
+  std::vector<double> fresh_q;
   std::uint32_t star_read[6] = {};
   int stars = 0;
 };
@@ -81,7 +88,12 @@ void choose(const ImproveTets& m, std::uint32_t t, const double* sines, int max_
         out.is_edge = false;
       }
     }
-  if (out.have) out.in_region = m.fresh_in_region(best.fresh, m.region(best.old[0]));
+  out.fresh_q.clear();
+  if (!out.have) return;
+  out.in_region = m.fresh_in_region(best.fresh, m.region(best.old[0]));
+  for (std::size_t k = 0; k < best.fresh.size(); k += 4)
+    out.fresh_q.push_back(tet_sine(m.p(best.fresh[k]), m.p(best.fresh[k + 1]), m.p(best.fresh[k + 2]),
+                                   m.p(best.fresh[k + 3])));
 }
 
 using Entry = std::tuple<double, std::uint32_t, std::uint32_t>;  // quality, tet, version
@@ -113,6 +125,11 @@ class FlipQueue {
     else ++next_;
   }
   void push(const Entry& e) { heap_.push(e); }
+  /// The tet of the sorted first entries `d` places past the next one (kImproveNone if none):
+  /// the flip stage starts loading it before its turn.
+  std::uint32_t first_ahead(std::size_t d) const {
+    return next_ + d < first_.size() ? std::get<1>(first_[next_ + d]) : kImproveNone;
+  }
 
  private:
   bool from_heap() const { return next_ == first_.size() || (!heap_.empty() && heap_.top() < first_[next_]); }
@@ -154,12 +171,15 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
     while (!heap.empty() && batch.size() < batch_max) {
       const Entry e = heap.top();
       heap.pop();
+      if (const std::uint32_t a = heap.first_ahead(kAhead); a != kImproveNone) m.prefetch_tet(a);
       if (m.alive(std::get<1>(e)) && m.version(std::get<1>(e)) == std::get<2>(e))
         batch.push_back(e);
       else if (!carried.empty())
         carried.erase(key(e));
     }
     if (batch.empty()) break;
+    for (const Entry& e : batch)  // read after the choices, by this thread
+      for (int i = 0; i < 4; ++i) __builtin_prefetch(&touched[m.v(std::get<1>(e))[i]]);
     ++stamp;
     todo.clear();
     for (std::size_t k = 0; k < batch.size(); ++k) {
@@ -197,6 +217,8 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
         }
         break;
       }
+      if (k + 1 < batch.size() && choices[k + 1].have)  // the next replace's cavity
+        for (std::uint32_t o : choices[k + 1].best.old) m.prefetch_tet(o);
       const auto [q, t, ver] = batch[k];
       if (!m.alive(t) || m.version(t) != ver) continue;
       FlipChoice& c = choices[k];
@@ -214,10 +236,14 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
         continue;
       ++ops;
       ++(c.is_boundary ? counts.boundary_flips : c.is_edge ? counts.edge_removals : counts.face_removals);
-      for (std::uint32_t o : c.best.old) cache.refresh(o);
-      for (std::uint32_t n : created) {
+      // (A freed slot the new tets did not take is dead; the new tets' sines are the choice's.)
+      for (std::uint32_t o : c.best.old)
+        if (!m.alive(o)) cache.set(o, std::numeric_limits<double>::infinity());
+      for (std::size_t k = 0; k < created.size(); ++k) {
+        const std::uint32_t n = created[k];
         if (!c.is_boundary) m.mark_inside(n);  // flip_valid passed inside_ok on every one
-        const double qn = cache.refresh(n);
+        const double qn = c.fresh_q[k];
+        cache.set(n, qn);
         if (qn < threshold) heap.push(Entry(qn, n, m.version(n)));
       }
     }

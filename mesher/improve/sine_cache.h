@@ -48,6 +48,12 @@ class SineCache {
     if (t >= q_.size()) q_.resize(m_.capacity(), std::numeric_limits<double>::infinity());
     return q_[t] = m_.alive(t) ? sine_of(m_, t) : std::numeric_limits<double>::infinity();
   }
+  /// Slot t changed and its sine is q, computed by the caller as refresh(t) would (tet_sine of
+  /// its vertices in slot order; +inf for a dead slot).
+  void set(std::uint32_t t, double q) {
+    if (t >= q_.size()) q_.resize(m_.capacity(), std::numeric_limits<double>::infinity());
+    q_[t] = q;
+  }
   /// The vertices in `moved` changed position.
   void refresh_stars(const std::vector<std::uint32_t>& moved) {
     if (moved.size() > m_.capacity() / 64) return refresh_all();
