@@ -239,10 +239,10 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
       // (A freed slot the new tets did not take is dead; the new tets' sines are the choice's.)
       for (std::uint32_t o : c.best.old)
         if (!m.alive(o)) cache.set(o, std::numeric_limits<double>::infinity());
-      for (std::size_t k = 0; k < created.size(); ++k) {
-        const std::uint32_t n = created[k];
+      for (std::size_t j = 0; j < created.size(); ++j) {
+        const std::uint32_t n = created[j];
         if (!c.is_boundary) m.mark_inside(n);  // flip_valid passed inside_ok on every one
-        const double qn = c.fresh_q[k];
+        const double qn = c.fresh_q[j];
         cache.set(n, qn);
         if (qn < threshold) heap.push(Entry(qn, n, m.version(n)));
       }
