@@ -1118,7 +1118,7 @@ TEST(FlipPass, BatchesOnSeveralThreadsMakeTheOneThreadFlips) {
       const std::size_t ops = flip_pass(m, cache, deg_to_sine(30), 10, counts, &boundary, threads);
       EXPECT_EQ(ops, counts.edge_removals + counts.face_removals + counts.boundary_flips);
       // The cache is current: the new tets' sines, computed with the choices, are refresh's.
-      EXPECT_EQ(cache.q(), SineCache(m, 1).q()) << "h " << h << ", " << threads << " threads";
+      EXPECT_EQ(cache.q(), SineCache(m, 1).q()) << threads << " threads";
       m.write_back(vm);
       return vm;
     };
