@@ -511,21 +511,23 @@ class Kernel {
     c1 = s[1] > 0;
   }
 
-  /// Collects the tets in conflict with p, breadth-first from `base`. A parallel worker gives
-  /// up (false, marks cleared) on a conflicting tet it does not own, or when its slot range
-  /// cannot hold the new tets. Unvisited neighbours are tested two at a time (in_conflict2)
-  /// and recorded in the order they were met, so the cavity and its boundary come out exactly
-  /// as with one test at a time.
+  /// Collects the tets in conflict with p, breadth-first from `base`. Unvisited neighbours are
+  /// tested two at a time (in_conflict2) and recorded in the order they were met, so the cavity
+  /// and its boundary come out exactly as with one test at a time. A parallel worker gives up
+  /// (false, marks cleared) when the cavity holds a tet it does not own, or when its slot range
+  /// cannot hold the new tets. It checks a tet's ownership when it comes to expand it, not when
+  /// the tet is found in conflict: the recording then stays free of branches, whose outcome (in
+  /// conflict or not) is a coin toss. The decision is the same: the cavity holds a tet the
+  /// worker does not own or it does not, and such a tet is never expanded.
   [[gnu::always_inline]] bool grow_cavity(std::uint32_t base, const double* p) {
     Mark* const state = state_;
     const std::uint32_t* const T = T_;
     cavity_.clear();
-    if constexpr (kParallel) touched_.clear();
     cavity_.push(base);
     state[base] = kInCavity;
-    // Records a tested tet; false when a parallel worker must give up. Only a parallel worker
-    // lists the tets tested and not in conflict, to unmark them if it gives up; otherwise
-    // fill_cavity() unmarks them, as each is outside a face of the cavity's boundary.
+    // Records a tested tet, without a branch: kInCavity and onto the cavity if in conflict,
+    // otherwise left kOutside (fill_cavity() unmarks it, as each is outside a face of the
+    // cavity's boundary).
     auto record = [&](std::uint32_t n, bool conflict) {
       // If n is in conflict, its neighbours will be tested once the tets queued before it are
       // done: start loading their records and marks now, the earliest moment the addresses are
@@ -537,41 +539,32 @@ class Kernel {
         __builtin_prefetch(&T[8 * std::size_t(u)]);
         __builtin_prefetch(&state[u]);
       }
-      if constexpr (!kParallel) {  // without a branch: the outcome is a coin toss
-        state[n] = Mark(kOutside - conflict);  // kInCavity if in conflict
-        cavity_.push_unchecked(n);            // room reserved by the caller
-        cavity_.set_end(cavity_.end() - !conflict);
-      } else if (!conflict) {
-        touched_.push(n);
-      } else {
-        if (!owns_tet(n)) {
-          state[n] = kUnvisited;
-          return false;
-        }
-        state[n] = kInCavity;
-        cavity_.push(n);
-      }
-      return true;
+      state[n] = Mark(kOutside - conflict);  // kInCavity if in conflict
+      cavity_.push_unchecked(n);            // room reserved by the caller
+      cavity_.set_end(cavity_.end() - !conflict);
     };
     // Neighbours met, marked kOutside and not tested yet, in the order met: at most one left
     // over from the last cavity tet plus four new ones.
     std::uint32_t pend[6] = {};  // (pend[j] below may be read past np; never used then)
     std::size_t np = 0;
-    auto unmark_pending = [&](std::size_t from) {
-      for (std::size_t j = from; j < np; ++j) state[pend[j]] = kUnvisited;
-      return abandon_cavity();
-    };
     for (std::size_t i = 0;;) {
       if (i == cavity_.size()) {
         if (np == 0) break;
         np = 0;  // one left: pairs are tested as soon as they form
         cavity_.reserve_more(1);
-        if (!record(pend[0], in_conflict(pend[0], p))) return abandon_cavity();
+        record(pend[0], in_conflict(pend[0], p));
         continue;  // it may have grown the cavity
       }
+      const std::uint32_t c = cavity_[i];
+      // A tet found in conflict is adjacent to an expanded one, which the worker owns: no other
+      // worker can own it or reach it, so it was safe to test and mark. Its neighbours may not be.
+      if constexpr (kParallel)
+        if (!owns_tet(c)) [[unlikely]]
+          return abandon_cavity(i);
       // Gather the unvisited neighbours without a branch per face (whether a neighbour is new
       // is unpredictable): each is written at the end and kept by moving the end past it.
-      const std::uint32_t* adj = &T[8 * std::size_t(cavity_[i++]) + 4];
+      const std::uint32_t* adj = &T[8 * std::size_t(c) + 4];
+      ++i;
       // The next cavity tet's neighbours will be tested soon: start loading their records (a
       // cache miss each on large inputs; 1M points, with locate()'s prefetch: -14% on the
       // cube, -24% on the axes).
@@ -592,8 +585,8 @@ class Kernel {
       for (; j + 1 < np; j += 2) {
         bool c0, c1;
         in_conflict2(pend[j], pend[j + 1], p, c0, c1);
-        if (!record(pend[j], c0)) return unmark_pending(j + 1);
-        if (!record(pend[j + 1], c1)) return unmark_pending(j + 2);
+        record(pend[j], c0);
+        record(pend[j + 1], c1);
       }
       pend[0] = pend[j];
       np -= j;
@@ -601,15 +594,22 @@ class Kernel {
     if constexpr (kParallel) {
       // A cavity of k tets (a ball) has at most 2k + 2 boundary faces, one new tet each; k of
       // them reuse the cavity's slots.
-      if (cavity_.size() + 2 > free_.size() + (terr_.end - terr_.next)) return abandon_cavity();
+      if (cavity_.size() + 2 > free_.size() + (terr_.end - terr_.next))
+        return abandon_cavity(cavity_.size());
     }
     stats_.conflicts += cavity_.size();
     return true;
   }
 
-  bool abandon_cavity() {
+  /// A parallel worker gives the cavity up: unmarks its tets and every tet marked while the
+  /// first `expanded` of them were expanded, i.e. their neighbours (tested or still pending).
+  /// Those are adjacent to tets the worker owns, so no other worker marks them meanwhile.
+  bool abandon_cavity(std::size_t expanded) {
+    for (std::size_t j = 0; j < expanded; ++j) {
+      const std::uint32_t* adj = &T_[8 * std::size_t(cavity_[j]) + 4];
+      for (int f = 0; f < 4; ++f) state_[adj[f] >> 2] = kUnvisited;
+    }
     for (std::uint32_t t : cavity_) state_[t] = kUnvisited;
-    for (std::uint32_t t : touched_) state_[t] = kUnvisited;
     return false;
   }
 
@@ -685,7 +685,7 @@ class Kernel {
   Rng rng_;
   Territory terr_;
   Stack<std::uint32_t> free_;
-  Stack<std::uint32_t> cavity_, touched_;
+  Stack<std::uint32_t> cavity_;
   Stack<BoundaryFace> boundary_;
   EdgeMap edges_;
   std::uint32_t last_ = 0;
