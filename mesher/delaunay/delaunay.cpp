@@ -831,9 +831,11 @@ Slabs pick_slabs(const Store& s, const std::vector<std::uint32_t>& todo, const D
           // 1M cube points: the seven rounds' samples took 33 ms in all, now 10-15 ms.
           if (t + 16 * tstride < end) __builtin_prefetch(&s.T[8 * (t + 16 * tstride)]);
           if (t + 8 * tstride < end) {
+            // A dead slot may hold only its kDead mark (a worker's unused slot): read no further.
             const std::uint32_t* a = &s.T[8 * (t + 8 * tstride)];
-            for (int i = 0; i < 4; ++i)
-              if (a[i] < s.n) __builtin_prefetch(s.P(a[i]));
+            if (a[0] != kDead)
+              for (int i = 0; i < 4; ++i)
+                if (a[i] < s.n) __builtin_prefetch(s.P(a[i]));
           }
           const std::uint32_t* v = &s.T[8 * t];
           if (v[0] == kDead || v[0] == kInf || v[1] == kInf || v[2] == kInf || v[3] == kInf) continue;
