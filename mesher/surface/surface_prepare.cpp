@@ -252,7 +252,6 @@ std::vector<std::uint32_t> match_edges(const Work& w) {
   std::sort(hes.begin(), hes.end(),
             [](const HalfEdge& a, const HalfEdge& b) { return a.key != b.key ? a.key < b.key : a.h < b.h; });
   std::vector<std::pair<std::uint64_t, std::uint32_t>> boundary, nonmanifold;  // key, first h
-  std::size_t nonmanifold_uses = 0;
   for (std::size_t i = 0; i < hes.size();) {
     std::size_t j = i + 1;
     while (j < hes.size() && hes[j].key == hes[i].key) ++j;
@@ -263,7 +262,6 @@ std::vector<std::uint32_t> match_edges(const Work& w) {
       twin[hes[i + 1].h] = hes[i].h;
     } else {
       nonmanifold.push_back({hes[i].key, hes[i].h});
-      nonmanifold_uses += j - i;
     }
     i = j;
   }
