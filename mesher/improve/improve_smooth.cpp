@@ -49,8 +49,9 @@ std::array<double, 3> min_norm_point(const std::vector<std::array<double, 3>>& g
 class VertexStar {
  public:
   /// False if v may not move (a feature node, a surface node off a planar fan unless
-  /// `curved` and ctx.boundary, ...).
-  bool load(const ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, bool curved) {
+  /// `curved` and ctx.boundary, ...). `star`, if given, is v's star (not walked again).
+  bool load(const ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, bool curved,
+            const KnownStar* star) {
     m_ = &m;
     v_ = v;
     ctx_ = &ctx;
@@ -62,7 +63,12 @@ class VertexStar {
     if (feature_ && !(curved && ctx.slide_features && ctx.boundary && ctx.boundary->features))
       return false;
     if (on_surface_ && (kind == NodeKind::corner || !ctx.surface || !ctx.query)) return false;
-    m.star(v, star_);
+    if (star) {  // every tet's lines requested at once, where the walk finds them one by one
+      star_.assign(star->tets, star->tets + star->size);
+      for (std::uint32_t t : star_) m.prefetch_tet(t);
+    } else {
+      m.star(v, star_);
+    }
     if (star_.empty()) return false;
     for (std::uint32_t t : star_)  // (the positions are read below and in every evaluation)
       for (int k = 0; k < 4; ++k) __builtin_prefetch(m.p(m.v(t)[k]));
@@ -410,11 +416,11 @@ bool slide_on_curve(const ImproveTets& m, const VertexStar& vs, int iterations, 
 }  // namespace
 
 bool smooth_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, double* before,
-                   double* after) {
+                   double* after, const KnownStar* star) {
   static thread_local VertexStar vs;
   static thread_local std::vector<std::array<double, 3>> grads, active;
   static thread_local std::vector<double> qs;
-  if (!vs.load(m, v, ctx, true)) return false;
+  if (!vs.load(m, v, ctx, true, star)) return false;
   const double* x0 = m.p(v);
   double x[3] = {x0[0], x0[1], x0[2]};
   const double q_start = vs.eval(x);
@@ -474,10 +480,10 @@ bool smooth_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, do
 }
 
 bool relax_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, double floor,
-                  const StarValues* known) {
+                  const StarValues* known, const KnownStar* star) {
   static thread_local VertexStar vs;
   static thread_local std::vector<SineRatio> each;
-  if (!vs.load(m, v, ctx, false)) return false;
+  if (!vs.load(m, v, ctx, false, star)) return false;
   const double* x0 = m.p(v);
   double c[3] = {0, 0, 0};
   for (std::uint32_t w : vs.link())

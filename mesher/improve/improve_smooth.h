@@ -11,6 +11,7 @@
 // orientation and lying on the surface within the context's tolerance.
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
+#include <cstddef>
 #include <cstdint>
 
 #include "mesher/improve/improve_boundary.h"
@@ -34,10 +35,17 @@ struct SmoothContext {
   int iterations = 4;          ///< ascent steps per call
 };
 
+/// A vertex's star as ImproveTets::star gives it (the same tets in the same order), when the
+/// caller walked it already: the moves below then do not walk it again.
+struct KnownStar {
+  const std::uint32_t* tets = nullptr;
+  std::size_t size = 0;
+};
+
 /// Tries to move vertex v. Returns true if it moved; *before / *after get the star's smallest
-/// tet_sine (if not null).
+/// tet_sine (if not null). `star`, if given, is v's star.
 bool smooth_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx,
-                   double* before = nullptr, double* after = nullptr);
+                   double* before = nullptr, double* after = nullptr, const KnownStar* star = nullptr);
 
 /// Smart Laplacian: moves v towards the centroid of its neighbours (the whole way, half or a
 /// quarter) if that raises the sum of the star's radius ratios and keeps the star's smallest
@@ -50,7 +58,8 @@ struct StarValues {
   double* sine = nullptr;   ///< per tet slot: tet_sine
   double* ratio = nullptr;  ///< per tet slot: tet_radius_ratio
 };
+/// `star`, if given, is v's star.
 bool relax_vertex(ImproveTets& m, std::uint32_t v, const SmoothContext& ctx, double floor,
-                  const StarValues* known = nullptr);
+                  const StarValues* known = nullptr, const KnownStar* star = nullptr);
 
 }  // namespace kdmesh
