@@ -81,12 +81,12 @@ std::vector<std::uint32_t> colour_pass(ImproveTets& m, const std::vector<std::ui
   for (std::size_t k = 0; k < n; ++k) slot[verts[k]] = std::uint32_t(k);
   // Each worker walks the stars of a contiguous range of `verts` and lists them, and the
   // earlier neighbours of each vertex (positions in verts, each once). Vertex k's lists start
-  // at nb_at[k] and star_at[k] in its worker's arrays. On the paper gear box (3.2M vertices):
-  // walking each star once more for its move took about a sixth of the relaxation; copying
-  // the neighbour lists into one array, 0.3 s; listing a neighbour once per tet that holds
-  // it (35 entries a vertex instead of 7) and growing the lists by copying, 1.5 CPU-s of page
-  // faults. The lists are reserved for more than the usual stars (23 tets for an interior
-  // vertex): room never written costs no memory.
+  // at nb_at[k] and star_at[k] in its worker's arrays. On the paper gear box (3.2M vertices,
+  // an 11.5 s relaxation): walking each star again for its move cost 0.8 s; copying the
+  // neighbour lists into one array, 0.9 s; listing a neighbour once per tet holding the edge
+  // to it (34 entries a vertex instead of about 7) and growing the lists by copying, 0.3 s.
+  // The lists are reserved for more than the usual stars (22 tets on average): room never
+  // written costs no memory.
   struct Lists {
     std::size_t first = 0, last = 0;  // the worker's range of verts
     std::vector<std::uint32_t> nb, stars;
