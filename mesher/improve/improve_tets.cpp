@@ -185,8 +185,8 @@ void ImproveTets::link_face(std::uint32_t t, int i, std::uint32_t ref) {
 void ImproveTets::certify_inside() {
   if (!inside_query) return;
   const std::size_t nt = tv_.size() / 4;
-  // The tets with a surface vertex, found on all threads (one thread's scan of the paper gear
-  // box's 23.6M tets, with the fill of sub_of, took 0.3 s).
+  // The tets with a surface vertex, found on all threads (the paper gear box has 23.6M tets;
+  // its input stage took 2.1 s with this scan and the fill of sub_of on one thread).
   const std::vector<std::uint32_t> slots = parallel_collect(
       nt, [&](std::size_t t) { return v(std::uint32_t(t))[0] != kImproveNone && has_surface_vertex(v(std::uint32_t(t))); });
   std::vector<std::uint32_t, UninitAllocator<std::uint32_t>> sub_of(nt);

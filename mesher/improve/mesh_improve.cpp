@@ -160,7 +160,7 @@ std::vector<std::uint32_t> colour_pass(ImproveTets& m, const std::vector<std::ui
 }
 
 /// The vertices of the live tets t with value[t] < below, in id order (the tets scanned on
-/// up to `threads` threads: one thread's scan of the paper gear box's 23.6M tets took 0.3 s).
+/// up to `threads` threads: the paper gear box has 23.6M).
 std::vector<std::uint32_t> vertices_below(const ImproveTets& m, const double* value, double below,
                                           unsigned threads) {
   std::vector<std::uint8_t> pick(m.nodes().size_count(), 0);
