@@ -11,7 +11,6 @@
 
 #include "core/error.h"
 #include "mesher/bucket_scatter.h"
-#include "core/parallel_collect.h"
 #include "core/parallel_for.h"
 #include "core/uninit_allocator.h"
 #include "mesher/volume/volume_mesh.h"
@@ -185,21 +184,13 @@ void ImproveTets::link_face(std::uint32_t t, int i, std::uint32_t ref) {
 void ImproveTets::certify_inside() {
   if (!inside_query) return;
   const std::size_t nt = tv_.size() / 4;
-  // The tets with a surface vertex, found on all threads (the paper gear box has 23.6M tets;
-  // its input stage took 2.1 s with this scan and the fill of sub_of on one thread).
-  const std::vector<std::uint32_t> slots = parallel_collect(
-      nt, [&](std::size_t t) { return v(std::uint32_t(t))[0] != kImproveNone && has_surface_vertex(v(std::uint32_t(t))); });
-  std::vector<std::uint32_t, UninitAllocator<std::uint32_t>> sub_of(nt);
-  std::vector<std::uint32_t> sub_tets(4 * slots.size());
-  parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
-    std::fill(sub_of.begin() + std::ptrdiff_t(b), sub_of.begin() + std::ptrdiff_t(e), kImproveNone);
-  }, 1 << 16);
-  parallel_for(slots.size(), [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t k = b; k < e; ++k) {
-      sub_of[slots[k]] = std::uint32_t(k);
-      std::copy_n(v(slots[k]), 4, &sub_tets[4 * k]);
+  std::vector<std::uint32_t> sub_of(nt, kImproveNone), slots, sub_tets;
+  for (std::uint32_t t = 0; t < nt; ++t)
+    if (v(t)[0] != kImproveNone && has_surface_vertex(v(t))) {
+      sub_of[t] = std::uint32_t(slots.size());
+      slots.push_back(t);
+      sub_tets.insert(sub_tets.end(), v(t), v(t) + 4);
     }
-  }, 1 << 16);
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
   for (std::uint32_t k = 0; k < slots.size(); ++k)
     for (int i = 0; i < 4; ++i) {
