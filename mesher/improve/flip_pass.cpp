@@ -14,7 +14,6 @@
 #include <utility>
 #include <vector>
 
-#include "core/parallel_collect.h"
 #include "mesher/improve/improve_flips.h"
 #include "mesher/improve/improve_quality.h"
 #include "mesher/worker_team.h"
@@ -148,12 +147,10 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
   // housing), near the cost of starting a thread: the threads are started once, not per batch.
   std::unique_ptr<WorkerTeam> team;
   if (asked > 1) team = std::make_unique<WorkerTeam>(asked);
-  const double* q = cache.q().data();
-  const std::vector<std::uint32_t> below =
-      parallel_collect(m.capacity(), [&](std::size_t t) { return q[t] < threshold; }, 65536, asked);
+  const std::vector<std::uint32_t> below = cache.below(threshold);
   std::vector<Entry> first;
   first.reserve(below.size());
-  for (std::uint32_t t : below) first.emplace_back(q[t], t, m.version(t));
+  for (std::uint32_t t : below) first.emplace_back(cache.q()[t], t, m.version(t));
   FlipQueue heap(std::move(first), team.get());
   const unsigned workers = team ? team->size() : 1;
   const std::size_t batch_max = workers > 1 ? kBatch : 1;

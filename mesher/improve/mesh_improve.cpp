@@ -23,7 +23,6 @@
 #include "mesher/improve/improve_smooth.h"
 #include "mesher/improve/improve_tets.h"
 #include "mesher/improve/sine_cache.h"
-#include "core/parallel_collect.h"
 #include "core/parallel_for.h"
 #include "core/uninit_allocator.h"
 #include "mesher/tet_quality.h"
@@ -186,14 +185,15 @@ std::vector<std::uint32_t> smooth_pass(ImproveTets& m, const SineCache& cache, d
 }
 
 /// Smart-Laplacian relaxation of every vertex of a tet whose radius ratio is below `below`;
-/// returns the vertices moved. Every tet's sine and ratio are computed once and kept up to
-/// date by the moves (a vertex's star at its own position is then read, not computed: about
-/// a third of the relaxation's quality evaluations); the sines become the cache's.
+/// returns the vertices moved. Every tet's ratio is computed once, its sine taken from the
+/// cache, and both are kept up to date by the moves (a vertex's star at its own position is
+/// then read, not computed: about a third of the relaxation's quality evaluations); the sines
+/// go back to the cache.
 std::vector<std::uint32_t> relax_pass(ImproveTets& m, SineCache& cache, double below, double floor,
                                       const SmoothContext& ctx, unsigned threads) {
   // (The cache's own array, current for every slot, and a ratio array written whole by the
   // pass: filling fresh arrays of 8 bytes a tet on this thread took about a second of the
-  // paper gear box. Computing the sines again with the ratios took 0.4 s of it.)
+  // paper gear box. Computing the sines again with the ratios took about 0.35 s.)
   std::vector<double> sine = cache.take();
   std::vector<double, UninitAllocator<double>> ratio(m.capacity());
   parallel_for(sine.size(), [&](std::size_t b, std::size_t e, unsigned) {
@@ -212,20 +212,12 @@ std::vector<std::uint32_t> relax_pass(ImproveTets& m, SineCache& cache, double b
 }
 
 
-/// The tet slots whose cached tet_sine is below `threshold`, in order (scanned on up to
-/// `threads` threads; dead slots hold infinity).
-std::vector<std::uint32_t> tets_below(const SineCache& cache, double threshold, unsigned threads) {
-  const double* q = cache.q().data();
-  return parallel_collect(cache.q().size(), [&](std::size_t t) { return q[t] < threshold; }, 65536, threads);
-}
-
 /// Takes out every boundary cap below `threshold` (worst first, ties by id); a tet that a
 /// removal leaves with two boundary faces is tried too. Returns how many were removed.
-std::size_t cap_pass(ImproveTets& m, SineCache& cache, double threshold, const BoundaryContext& ctx,
-                     unsigned threads) {
+std::size_t cap_pass(ImproveTets& m, SineCache& cache, double threshold, const BoundaryContext& ctx) {
   using Entry = std::tuple<double, std::uint32_t, std::uint32_t>;  // quality, tet, version
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
-  for (std::uint32_t t : tets_below(cache, threshold, threads)) heap.emplace(cache.q()[t], t, m.version(t));
+  for (std::uint32_t t : cache.below(threshold)) heap.emplace(cache.q()[t], t, m.version(t));
   std::size_t removed = 0;
   while (!heap.empty()) {
     const auto [q, t, ver] = heap.top();
@@ -271,10 +263,10 @@ bool split_a_boundary_edge(ImproveTets& m, std::uint32_t t, int max_ring, const 
 /// (split_boundary_edge, when `boundary` is given); failing that, the tet and its neighbours
 /// are replaced by a fan around a new interior node (insert_in_cavity). Returns the counts.
 SplitCounts split_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring,
-                       const BoundaryContext* boundary, bool insert, unsigned threads, bool any_tet = false) {
+                       const BoundaryContext* boundary, bool insert, bool any_tet = false) {
   std::vector<std::pair<double, std::uint32_t>> bad;
   const NodeSet& nodes = m.nodes();
-  for (std::uint32_t t : tets_below(cache, threshold, threads)) {
+  for (std::uint32_t t : cache.below(threshold)) {
     const std::uint32_t* v = m.v(t);
     int on_surface = 0;
     for (int i = 0; i < 4; ++i) on_surface += nodes.kind[v[i]] != NodeKind::interior;
@@ -409,13 +401,13 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain, const ImproveO
     st.rounds = r + 1;
     std::size_t ops = flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary, options.threads);
     if (cap_threshold > 0) {
-      const std::size_t removed = cap_pass(m, cache, cap_threshold, boundary, options.threads);
+      const std::size_t removed = cap_pass(m, cache, cap_threshold, boundary);
       st.caps_removed += removed;
       if (removed) ops += removed + flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary, options.threads);
     }
     if (options.split_angle > 0) {
       ops += split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary,
-                        options.insert_nodes, options.threads).add_to(st);
+                        options.insert_nodes).add_to(st);
     }
     stage("flip " + n, ops);
     if (r < options.relax_rounds) {
@@ -437,13 +429,13 @@ ImproveStats improve_mesh(VolumeMesh& mesh, const Domain& domain, const ImproveO
   if (options.rounds > 0 && (cap_threshold > 0 || options.split_angle > 0)) {
     std::size_t ops = 0;
     if (cap_threshold > 0) {
-      const std::size_t removed = cap_pass(m, cache, cap_threshold, boundary, options.threads);
+      const std::size_t removed = cap_pass(m, cache, cap_threshold, boundary);
       st.caps_removed += removed;
       ops += removed;
     }
     if (options.split_angle > 0) {
       ops += split_pass(m, cache, deg_to_sine(options.split_angle), options.max_ring, split_boundary,
-                        options.insert_nodes, options.threads, /*any_tet=*/true).add_to(st);
+                        options.insert_nodes, /*any_tet=*/true).add_to(st);
     }
     if (ops) ops += flip_pass(m, cache, threshold, options.max_ring, c, flip_boundary, options.threads);
     stage("final", ops);

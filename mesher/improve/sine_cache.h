@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "mesher/improve/improve_flips.h"
 #include "mesher/improve/improve_tets.h"
+#include "core/parallel_collect.h"
 #include "core/parallel_for.h"
 
 namespace kdmesh {
@@ -38,6 +39,12 @@ class SineCache {
       for (std::size_t t = b; t < e; ++t)
         if (!m_.alive(std::uint32_t(t))) q_[t] = std::numeric_limits<double>::infinity();
     }, 65536, threads_);
+  }
+  /// The slots whose value is below `threshold`, in order (dead slots hold +inf), found on
+  /// the cache's threads.
+  std::vector<std::uint32_t> below(double threshold) const {
+    const double* q = q_.data();
+    return parallel_collect(q_.size(), [q, threshold](std::size_t t) { return q[t] < threshold; }, 65536, threads_);
   }
   /// Hands the values over, one per tet slot (the cache is empty until assign): for a pass
   /// that keeps them up to date itself, without allocating and filling an array of its own.
