@@ -124,6 +124,9 @@ void canonicalize_triangulation(Triangulation& tri, const Ordering& order, Delau
 
   // The records in their new order, turned, with their face references renamed.
   TetRecords out;
+  // The same capacity as the kernel's records (untouched, it costs no memory): a later
+  // delaunay_insert then adds its tets without copying the records.
+  out.reserve(tri.data.capacity());
   out.resize(tri.data.size());
   parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t k = b; k < e; ++k) {

@@ -1188,8 +1188,11 @@ void delaunay_insert(Triangulation& tri, const PointSet& points,
   s.v2t.assign(n + 1, kNone);
   s.T = std::move(tri.data);
   s.used = s.T.size() / 8;
-  s.T.reserve(s.T.size() + 8 * (ids.size() * 15 / 2 + 64));
   s.state.assign(s.num_tets(), kUnvisited);
+  // Spare slots for the new tets (about 7 per point), so that the kernel does not grow its
+  // arrays by 1/64 of the mesh: that copies every record when the records' capacity is not
+  // there already (canonicalize_triangulation keeps the kernel's).
+  s.spare_slots(ids.size() * 15 / 2 + 64);
   for (std::size_t t = 0; t < s.num_tets(); ++t)
     for (int i = 0; i < 4; ++i)
       if (s.T[8 * t + i] != kInf) s.v2t[s.T[8 * t + i]] = std::uint32_t(t);
