@@ -428,6 +428,130 @@ TEST(FaceVerdicts, KeyedByTheOrientedFace) {
   EXPECT_EQ(c.find(f), nullptr);
 }
 
+// The table grows from empty through many rehashes; a put of a face already there replaces
+// its verdict. Oracle: a std::map keyed by the rotation that starts at the smallest id.
+TEST(FaceVerdicts, ManyFacesThroughRehashesMatchAMap) {
+  FaceVerdicts c;
+  std::map<std::array<std::uint32_t, 3>, std::pair<std::uint8_t, float>> want;
+  auto oriented = [](std::array<std::uint32_t, 3> f) {
+    std::rotate(f.begin(), std::min_element(f.begin(), f.end()), f.end());
+    return f;
+  };
+  Rng rng(7);
+  std::vector<std::array<std::uint32_t, 3>> faces;
+  for (int k = 0; k < 20000; ++k) {
+    std::array<std::uint32_t, 3> f{};
+    if (!faces.empty() && rng.next() % 4 == 0) {  // the same face again, another rotation
+      f = faces[rng.next() % faces.size()];
+      std::rotate(f.begin(), f.begin() + std::ptrdiff_t(rng.next() % 3), f.end());
+    } else {
+      for (auto& v : f) v = std::uint32_t(rng.next() % 3000);
+      if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) continue;
+      faces.push_back(f);
+    }
+    const std::uint8_t why = std::uint8_t(rng.next() % 8);
+    const float far = float(rng.next() % 1000) / 100;
+    c.put(f.data(), {why, far});
+    want[oriented(f)] = {why, far};
+  }
+  EXPECT_EQ(c.size(), want.size());
+  for (const auto& f : faces) {
+    const FaceVerdicts::Verdict* v = c.find(f.data());
+    ASSERT_NE(v, nullptr);
+    EXPECT_EQ(v->why, want.at(oriented(f)).first);
+    EXPECT_EQ(v->how_far, want.at(oriented(f)).second);
+    const std::array<std::uint32_t, 3> reversed{f[0], f[2], f[1]};
+    EXPECT_EQ(c.find(reversed.data()) != nullptr, want.count(oriented(reversed)) == 1);
+  }
+  const std::uint32_t reserved[3] = {1, 2, 0xFFFFFFFFu};
+  EXPECT_THROW(c.put(reserved, {0, 0.0f}), UsageError);
+}
+
+// manifold_defects groups the edges and corners with counting sorts on a few threads. The
+// oracle is the one-thread version it replaced: all (edge, face) and (vertex, face) pairs
+// sorted, runs read in order. Soups: two icospheres of 40,962 vertices each (vertex ids over
+// several of the parallel version's blocks, with unused ids between the spheres), with faces
+// removed (edges in one face), repeated (edges in three) and two spheres glued at a vertex
+// (two fans around it).
+namespace {
+ManifoldDefects manifold_defects_by_sorting(const std::vector<std::uint32_t>& verts) {
+  ManifoldDefects d;
+  const std::size_t nf = verts.size() / 3;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;
+  for (std::size_t f = 0; f < nf; ++f)
+    for (int j = 0; j < 3; ++j) {
+      const std::uint32_t a = verts[3 * f + j], b = verts[3 * f + (j + 1) % 3];
+      edges.push_back({(std::uint64_t(std::min(a, b)) << 32) | std::max(a, b), std::uint32_t(f)});
+    }
+  std::sort(edges.begin(), edges.end());
+  for (std::size_t i = 0, j = 0; i < edges.size(); i = j) {
+    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+    if (j - i == 2) continue;
+    d.bad_edges.push_back(std::uint32_t(edges[i].first >> 32));
+    d.bad_edges.push_back(std::uint32_t(edges[i].first));
+    for (std::size_t k = i; k < j; ++k) d.faces_at_bad_edges.push_back(edges[k].second);
+  }
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> vf;
+  for (std::size_t f = 0; f < nf; ++f)
+    for (int j = 0; j < 3; ++j) vf.push_back({verts[3 * f + j], std::uint32_t(f)});
+  std::sort(vf.begin(), vf.end());
+  for (std::size_t i = 0, j = 0; i < vf.size(); i = j) {
+    while (j < vf.size() && vf[j].first == vf[i].first) ++j;
+    const std::uint32_t v = vf[i].first;
+    std::map<std::uint32_t, std::uint32_t> parent;  // link vertex -> parent
+    auto find = [&](std::uint32_t x) {
+      while (parent[x] != x) x = parent[x];
+      return x;
+    };
+    for (std::size_t k = i; k < j; ++k) {
+      std::vector<std::uint32_t> o;
+      for (int c = 0; c < 3; ++c)
+        if (verts[3 * std::size_t(vf[k].second) + c] != v) o.push_back(verts[3 * std::size_t(vf[k].second) + c]);
+      for (const std::uint32_t x : o) parent.try_emplace(x, x);
+      const std::uint32_t x = find(o[0]), y = find(o[1]);
+      if (x != y) parent[x] = y;
+    }
+    std::size_t roots = 0;
+    for (const auto& [x, up] : parent) roots += x == up;
+    if (roots <= 1) continue;
+    d.bad_vertices.push_back(v);
+    for (std::size_t k = i; k < j; ++k) d.faces_at_bad_vertices.push_back(vf[k].second);
+  }
+  return d;
+}
+}  // namespace
+
+TEST(ManifoldDefects, SameAsSortingEveryEdgeAndCornerOnDamagedSpheres) {
+  const SurfaceMesh sphere = test::icosphere(6);
+  const std::uint32_t nv = std::uint32_t(sphere.points.size());
+  ASSERT_GT(nv, 2u * (1u << 14));
+  // Sphere 2's ids start 10,000 past sphere 1's; its vertex 0 is sphere 1's vertex 0 (glued).
+  auto sphere2 = [&](std::uint32_t v) { return v == 0 ? 0u : v + nv + 10000; };
+  Rng rng(22);
+  for (int round = 0; round < 4; ++round) {
+    std::vector<std::uint32_t> verts;
+    for (std::size_t f = 0; f < sphere.num_tris(); ++f) {
+      const std::uint32_t* t = sphere.tri(f);
+      const std::uint64_t r = rng.next() % 1000;
+      if (r < std::uint64_t(round)) continue;  // removed
+      const int copies = round > 0 && r >= 998 ? 2 : 1;  // repeated
+      for (int c = 0; c < copies; ++c) {
+        verts.insert(verts.end(), t, t + 3);
+        if (round % 2 == 1) verts.insert(verts.end(), {sphere2(t[0]), sphere2(t[1]), sphere2(t[2])});
+      }
+    }
+    const ManifoldDefects got = manifold_defects(verts), want = manifold_defects_by_sorting(verts);
+    EXPECT_EQ(got.bad_edges, want.bad_edges) << "round " << round;
+    EXPECT_EQ(got.faces_at_bad_edges, want.faces_at_bad_edges) << "round " << round;
+    EXPECT_EQ(got.bad_vertices, want.bad_vertices) << "round " << round;
+    EXPECT_EQ(got.faces_at_bad_vertices, want.faces_at_bad_vertices) << "round " << round;
+    if (round == 0) EXPECT_TRUE(want.bad_edges.empty() && want.bad_vertices.empty());
+    if (round >= 1) EXPECT_FALSE(want.bad_edges.empty()) << "round " << round;
+    if (round % 2 == 1) EXPECT_FALSE(want.bad_vertices.empty()) << "round " << round;
+  }
+  EXPECT_TRUE(manifold_defects({}).bad_edges.empty());
+}
+
 TEST(VolumeMesh, InteriorNodeTooCloseToSurfaceIsDropped) {
   Voxels vx = Voxels::block(3, 3, 3, 1.0);
   vx.set(1, 1, 1, false);
