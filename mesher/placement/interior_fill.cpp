@@ -136,7 +136,7 @@ struct Filler {
         ++L.stats.side_queries;
       }
     }
-    for (int k = k_lo; k <= k_hi; ++k) lattice_points(k, lo, hi, c, dc, side_c, far, L);
+    for (int k = k_lo; k <= k_hi; ++k) lattice_points(k, lo, hi, c, hc, dc, side_c, far, L);
   }
 
   /// The level-k lattice points in the block [lo, hi) (each point in exactly one block).
@@ -148,9 +148,16 @@ struct Filler {
   /// and the lattice's own coplanar and cospherical sets stay exactly so (the Delaunay
   /// kernel's symbolic perturbation then decides them consistently). The lattice is anchored
   /// at the origin of coordinates, not at the part.
-  void lattice_points(int k, const double* lo, const double* hi, const double* c, double dc,
+  void lattice_points(int k, const double* lo, const double* hi, const double* c, double hc, double dc,
                       int side_c, bool far, Local& L) const {
     const double a = spacing(k);
+    // The sizes of level k (level_of(h) = k), widened for the rounding of the logarithm: h
+    // above h_above has a lower level, h below h_below a higher one (but for the clamped end
+    // levels). A point whose h is known to be beyond them (h is lip-Lipschitz, h(c) = hc) is
+    // not evaluated: on the paper gear box 76 % of the points in their blocks had another
+    // level, each costing a field evaluation.
+    const double h_above = k > 0 ? hmax * std::pow(opt.rho, 0.5 - k) * (1 + 1e-9) : INFINITY;
+    const double h_below = k < max_level ? hmax * std::pow(opt.rho, -0.5 - k) * (1 - 1e-9) : 0.0;
     const std::int64_t(&M)[3][3] = opt.rotate_lattice ? kLatticeAxes : kAxisAligned;
     int e = 0;
     const double mantissa = std::frexp(a / 14, &e);  // (sets e before it is read below)
@@ -167,9 +174,15 @@ struct Filler {
     }
     for (int sub = 0; sub < 2; ++sub) {  // U = 2 (i, j, m) + sub
       std::int64_t i0[3], i1[3];
+      // The box of U over the block's corners, widened for the rounding of w (|w| < 2^37, so
+      // its error is below 2^-15; the margin is far above it and far below a lattice step).
+      // The exact test below decides each point. A margin of a whole step on each side made
+      // the box of a small block several times its points (2.9 billion tries for 23M points
+      // in the block on the paper gear box).
       for (int ax = 0; ax < 3; ++ax) {
-        i0[ax] = std::int64_t(std::floor((wlo[ax] - sub) / 2)) - 1;
-        i1[ax] = std::int64_t(std::ceil((whi[ax] - sub) / 2)) + 1;
+        const double margin = 1e-9 * (1 + std::max(std::fabs(wlo[ax]), std::fabs(whi[ax])));
+        i0[ax] = std::int64_t(std::floor((wlo[ax] - sub) / 2 - margin));
+        i1[ax] = std::int64_t(std::ceil((whi[ax] - sub) / 2 + margin));
       }
       for (std::int64_t i = i0[0]; i <= i1[0]; ++i)
         for (std::int64_t j = i0[1]; j <= i1[1]; ++j)
@@ -182,6 +195,9 @@ struct Filler {
               in = cand.p[ax] >= lo[ax] && cand.p[ax] < hi[ax];
             }
             if (!in) continue;
+            const double dx = cand.p[0] - c[0], dy = cand.p[1] - c[1], dz = cand.p[2] - c[2];
+            const double reach = lip * std::sqrt(dx * dx + dy * dy + dz * dz);
+            if (hc + reach < h_below || hc - reach > h_above) continue;
             cand.h = sizing(cand.p);
             if (level_of(cand.h) != k) continue;
             if (far)
