@@ -197,7 +197,7 @@ struct Filler {
             if (!in) continue;
             const double dx = cand.p[0] - c[0], dy = cand.p[1] - c[1], dz = cand.p[2] - c[2];
             const double reach = lip * std::sqrt(dx * dx + dy * dy + dz * dz);
-            if (hc + reach < h_below || hc - reach > h_above) continue;
+            if (opt.bound_levels && (hc + reach < h_below || hc - reach > h_above)) continue;
             cand.h = sizing(cand.p);
             if (level_of(cand.h) != k) continue;
             if (far)

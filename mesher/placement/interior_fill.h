@@ -53,6 +53,10 @@ struct InteriorFillOptions {
   std::uint32_t two_sided_from = kNoFacet;
   /// Threads for candidate generation (the result does not depend on it).
   unsigned threads = 2;
+  /// Skip the sizing field's evaluation at a lattice point whose level the block's bounds
+  /// decide to be another (h is Lipschitz; the same nodes either way). false evaluates every
+  /// point: a self-check for tests.
+  bool bound_levels = true;
 };
 
 struct InteriorFillStats {
