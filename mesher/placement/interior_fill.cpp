@@ -268,6 +268,7 @@ void add_boundary_layer(const SurfaceMesh& surface, const SurfaceQuery& query,
   Rng rng(options.seed ^ 0x6c8e9cf570932bd5ULL);
   constexpr std::size_t kBatchTries = std::size_t(1) << 16;
   const unsigned nthreads = std::max(1u, options.threads);
+  const double g = sizing.options().gradation;
   std::vector<LayerFrame> frames;
   std::vector<LayerTry> tries;
   std::size_t i = 0;
@@ -318,6 +319,16 @@ void add_boundary_layer(const SurfaceMesh& surface, const SurfaceQuery& query,
         const double dx = rad * std::cos(tr.angle), dy = rad * std::sin(tr.angle);
         for (int ax = 0; ax < 3; ++ax)
           tr.p[ax] = f.s[ax] - depth * n[ax] + dx * f.e1[ax] + dy * f.e2[ax];
+        // Most tries clash (17.2M of 18.1M on the paper gear box). A clash with a size below
+        // h(p) is a clash with h(p) (the spacing only grows with h), and h(p) >= h(s) - g |p - s|
+        // for the surface node s (its size a float: the margins cover that and the rounding).
+        // So a clash found with that bound needs no field evaluation; otherwise the try is
+        // decided as before. (A clash is all that is kept of a clashing try.)
+        const double h_lo = f.hs * (1 - 1e-6) - g * std::sqrt(depth * depth + rad * rad) * (1 + 1e-6);
+        if (h_lo > 0 && grid.conflicts(tr.p, h_lo, options.beta)) {
+          tr.clash = true;
+          continue;
+        }
         tr.h = sizing(tr.p);
         tr.clash = grid.conflicts(tr.p, tr.h, options.beta);
       }
