@@ -176,7 +176,7 @@ void sweep_facet(const double* a, const double* b, const double* c, double bx, d
                           : !odd ? double(j) / double(n)
                                  : (j == 0 ? 0.0 : j == n + 1 ? 1.0 : (double(j) - 0.5) / double(n));
         const double vv = sv + s2 * (ev - sv), ww = sw + s2 * (ew - sw);
-        visit(vv, ww);
+        visit(vv, ww, h_lo);
         ++stats.sweep_points;
       }
     }
@@ -191,6 +191,7 @@ SurfaceSamplingStats place_surface_nodes(const SurfaceMesh& surface, const Sizin
                                          const SpacingGrid* feature_balls) {
   SurfaceSamplingStats stats;
   const std::size_t nf = surface.num_tris();
+  const double grad = sizing.options().gradation;
   place_crease_nodes(surface, sizing, options, grid, nodes, feature_balls);
   std::vector<double> active;  // (s, t) facet coordinates of the accepted nodes of this facet
   for (std::size_t f = 0; f < nf; ++f) {
@@ -219,13 +220,17 @@ SurfaceSamplingStats place_surface_nodes(const SurfaceMesh& surface, const Sizin
     active.clear();
     // Adds the point of barycentric coordinates (1 - v - w, v, w) unless it is off the facet
     // or conflicts; x, y are its frame coordinates (for the Bridson step).
-    auto try_bary = [&](double vv, double w, double x, double y) -> bool {
+    // h_floor: a lower bound of h at the point (0: none). A conflict at a size below h is a
+    // conflict at h (the spacing only grows with h), and most tries conflict: those found
+    // at the bound need no field evaluation. The decisions are the same.
+    auto try_bary = [&](double vv, double w, double x, double y, double h_floor) -> bool {
       const double uu = (1 - vv) - w;
       if (!(uu >= 0 && vv >= 0 && w >= 0)) return false;
       double p[3];
       // From a: a facet in a coordinate plane keeps that coordinate exactly (uu + vv + w is
       // not always exactly 1).
       for (int k = 0; k < 3; ++k) p[k] = a[k] + vv * (b[k] - a[k]) + w * (c[k] - a[k]);
+      if (h_floor > 0 && grid.conflicts(p, h_floor, options.beta)) return false;
       const double h = sizing(p);
       if (grid.conflicts(p, h, options.beta) || in_feature_ball(feature_balls, p)) return false;
       grid.insert(p, h);
@@ -235,10 +240,12 @@ SurfaceSamplingStats place_surface_nodes(const SurfaceMesh& surface, const Sizin
       active.push_back(h);
       return true;
     };
-    auto try_add = [&](double x, double y) -> bool {  // frame coordinates
+    auto try_add = [&](double x, double y, double h_floor) -> bool {  // frame coordinates
       const double w = y / cy;
-      return try_bary((x - w * cx) / bx, w, x, y);
+      return try_bary((x - w * cx) / bx, w, x, y, h_floor);
     };
+    // Rounding of the points' positions, for the bounds below (far above it).
+    const double scale = std::fabs(a[0]) + std::fabs(a[1]) + std::fabs(a[2]) + lu + std::fabs(cx) + std::fabs(cy);
     auto advance = [&] {  // Bridson step around the accepted nodes (depth-first, newest first)
       while (!active.empty()) {
         const std::size_t k = active.size() - 3;
@@ -247,7 +254,9 @@ SurfaceSamplingStats place_surface_nodes(const SurfaceMesh& surface, const Sizin
         for (int tr = 0; tr < options.tries && !added; ++tr) {
           const double ang = rng.uniform(0, 2 * std::numbers::pi);
           const double rad = r * (1 + rng.uniform());
-          added = try_add(x0 + rad * std::cos(ang), y0 + rad * std::sin(ang));
+          // h is g-Lipschitz and the try is rad from the active node, whose h is h0.
+          const double h_floor = active[k + 2] * (1 - 1e-9) - grad * (rad * (1 + 1e-6) + 1e-12 * scale);
+          added = try_add(x0 + rad * std::cos(ang), y0 + rad * std::sin(ang), h_floor);
         }
         if (!added) active.resize(k);  // retire it (an addition pushed a new active node)
       }
@@ -264,11 +273,12 @@ SurfaceSamplingStats place_surface_nodes(const SurfaceMesh& surface, const Sizin
         r1 = 1 - r1;
         r2 = 1 - r2;
       }
-      try_add(r1 * bx + r2 * cx, r2 * cy);
+      try_add(r1 * bx + r2 * cx, r2 * cy, 0.0);
       advance();
     }
-    sweep_facet(a, b, c, bx, cx, cy, sizing, options.beta, stats, [&](double vv, double ww) {
-      try_bary(vv, ww, vv * bx + ww * cx, ww * cy);
+    sweep_facet(a, b, c, bx, cx, cy, sizing, options.beta, stats, [&](double vv, double ww, double h_floor) {
+      // h_floor: h's lower bound over the sweep's piece.
+      try_bary(vv, ww, vv * bx + ww * cx, ww * cy, h_floor * (1 - 1e-9) - grad * 1e-12 * scale);
       advance();
     });
   }
