@@ -472,7 +472,8 @@ TEST(FaceVerdicts, ManyFacesThroughRehashesMatchAMap) {
 // sorted, runs read in order. Soups: two icospheres of 40,962 vertices each (vertex ids over
 // several of the parallel version's blocks, with unused ids between the spheres), with faces
 // removed (edges in one face), repeated (edges in three) and two spheres glued at a vertex
-// (two fans around it).
+// (two fans around it); each also with its ids spread up to 3.7e9, and one triangle with the
+// largest ids (the groups would take O(largest id) memory: sparse ids are renamed first).
 namespace {
 ManifoldDefects manifold_defects_by_sorting(const std::vector<std::uint32_t>& verts) {
   ManifoldDefects d;
@@ -545,11 +546,24 @@ TEST(ManifoldDefects, SameAsSortingEveryEdgeAndCornerOnDamagedSpheres) {
     EXPECT_EQ(got.faces_at_bad_edges, want.faces_at_bad_edges) << "round " << round;
     EXPECT_EQ(got.bad_vertices, want.bad_vertices) << "round " << round;
     EXPECT_EQ(got.faces_at_bad_vertices, want.faces_at_bad_vertices) << "round " << round;
+    // Sparse ids (up to 3.7e9), which manifold_defects renames to their ranks first.
+    std::vector<std::uint32_t> sparse(verts);
+    for (std::uint32_t& v : sparse) v = v * 40000u + 7u;
+    const ManifoldDefects got_sparse = manifold_defects(sparse), want_sparse = manifold_defects_by_sorting(sparse);
+    EXPECT_EQ(got_sparse.bad_edges, want_sparse.bad_edges) << "round " << round;
+    EXPECT_EQ(got_sparse.faces_at_bad_edges, want_sparse.faces_at_bad_edges) << "round " << round;
+    EXPECT_EQ(got_sparse.bad_vertices, want_sparse.bad_vertices) << "round " << round;
+    EXPECT_EQ(got_sparse.faces_at_bad_vertices, want_sparse.faces_at_bad_vertices) << "round " << round;
+    EXPECT_EQ(got_sparse.bad_edges.size(), got.bad_edges.size());
     if (round == 0) EXPECT_TRUE(want.bad_edges.empty() && want.bad_vertices.empty());
     if (round >= 1) EXPECT_FALSE(want.bad_edges.empty()) << "round " << round;
     if (round % 2 == 1) EXPECT_FALSE(want.bad_vertices.empty()) << "round " << round;
   }
   EXPECT_TRUE(manifold_defects({}).bad_edges.empty());
+  // The largest id: one triangle, its three edges in one face each.
+  const ManifoldDefects top = manifold_defects({0xFFFFFFFEu, 0xFFFFFFFFu, 0xFFFFFFFDu});
+  EXPECT_EQ(top.bad_edges, (std::vector<std::uint32_t>{0xFFFFFFFDu, 0xFFFFFFFEu, 0xFFFFFFFDu, 0xFFFFFFFFu,
+                                                      0xFFFFFFFEu, 0xFFFFFFFFu}));
 }
 
 TEST(VolumeMesh, InteriorNodeTooCloseToSurfaceIsDropped) {

@@ -54,12 +54,26 @@ bool triangle_circumcentre(const double* a, const double* b, const double* c, do
   return std::isfinite(out[0]) && std::isfinite(out[1]) && std::isfinite(out[2]);
 }
 
-ManifoldDefects manifold_defects(const std::vector<std::uint32_t>& verts) {
+ManifoldDefects manifold_defects(const std::vector<std::uint32_t>& input) {
   ManifoldDefects d;
-  const std::size_t nf = verts.size() / 3;
+  const std::size_t nf = input.size() / 3;
   if (nf == 0) return d;
   if (3 * nf >= (std::size_t(1) << 32)) throw UsageError("manifold_defects: too many faces");
-  const std::uint32_t np = *std::max_element(verts.begin(), verts.begin() + std::ptrdiff_t(3 * nf)) + 1;
+  std::size_t np = std::size_t(*std::max_element(input.begin(), input.begin() + std::ptrdiff_t(3 * nf))) + 1;
+  // The groups below take O(largest id) memory: sparse ids (not a mesher's, whose nodes are
+  // numbered densely) are first renamed to their ranks, which keeps their order.
+  std::vector<std::uint32_t> id_of, ranked;  // rank -> id; the faces by ranks
+  if (np > 12 * nf + 1024) {
+    id_of.assign(input.begin(), input.begin() + std::ptrdiff_t(3 * nf));
+    std::sort(id_of.begin(), id_of.end());
+    id_of.erase(std::unique(id_of.begin(), id_of.end()), id_of.end());
+    ranked.resize(3 * nf);
+    for (std::size_t k = 0; k < 3 * nf; ++k)
+      ranked[k] = std::uint32_t(std::lower_bound(id_of.begin(), id_of.end(), input[k]) - id_of.begin());
+    np = id_of.size();
+  }
+  const std::vector<std::uint32_t>& verts = id_of.empty() ? input : ranked;
+  auto id = [&](std::uint32_t v) { return id_of.empty() ? v : id_of[v]; };
   // Edge k (0 <= k < 3 nf): the edge of face k / 3 from its vertex k % 3 to the next.
   auto edge = [&](std::size_t k) {
     const std::uint32_t a = verts[k], b = verts[3 * (k / 3) + (k % 3 + 1) % 3];
@@ -95,7 +109,8 @@ ManifoldDefects manifold_defects(const std::vector<std::uint32_t>& verts) {
     };
     for (std::size_t q = pb; q < pe; ++q) {
       ManifoldDefects& out = part[q];
-      for (std::uint32_t v = std::uint32_t(q * kBlock); v < std::min<std::size_t>(np, (q + 1) * kBlock); ++v) {
+      for (std::size_t vi = q * kBlock; vi < std::min(np, (q + 1) * kBlock); ++vi) {
+        const std::uint32_t v = std::uint32_t(vi);
         // Edges (v, w), v < w: each must be in exactly 2 faces.
         const auto first = ends.begin() + std::ptrdiff_t(edge_start[v]), last = ends.begin() + std::ptrdiff_t(edge_start[v + 1]);
         std::sort(first, last);
@@ -103,8 +118,8 @@ ManifoldDefects manifold_defects(const std::vector<std::uint32_t>& verts) {
           auto j = i;
           while (j != last && (*j >> 32) == (*i >> 32)) ++j;
           if (j - i != 2) {
-            out.bad_edges.push_back(v);
-            out.bad_edges.push_back(std::uint32_t(*i >> 32));
+            out.bad_edges.push_back(id(v));
+            out.bad_edges.push_back(id(std::uint32_t(*i >> 32)));
             for (auto k = i; k != j; ++k) out.faces_at_bad_edges.push_back(std::uint32_t(*k));
           }
           i = j;
@@ -124,7 +139,7 @@ ManifoldDefects manifold_defects(const std::vector<std::uint32_t>& verts) {
         std::size_t roots = 0;
         for (std::size_t k = 0; k < ids.size(); ++k) roots += find(std::uint32_t(k)) == k;
         if (roots > 1) {
-          out.bad_vertices.push_back(v);
+          out.bad_vertices.push_back(id(v));
           for (std::size_t k = vertex_start[v]; k < vertex_start[v + 1]; ++k) out.faces_at_bad_vertices.push_back(faces[k]);
         }
       }
