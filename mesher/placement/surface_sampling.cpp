@@ -244,8 +244,13 @@ SurfaceSamplingStats place_surface_nodes(const SurfaceMesh& surface, const Sizin
       const double w = y / cy;
       return try_bary((x - w * cx) / bx, w, x, y, h_floor);
     };
-    // Rounding of the points' positions, for the bounds below (far above it).
+    // A lower bound of h at a point within `dist` of a point where h >= h_known (h is
+    // g-Lipschitz), lowered for the rounding of h and of the points' positions (the margins
+    // are far above it).
     const double scale = std::fabs(a[0]) + std::fabs(a[1]) + std::fabs(a[2]) + lu + std::fabs(cx) + std::fabs(cy);
+    auto floor_at = [&](double h_known, double dist) {
+      return h_known * (1 - 1e-9) - grad * (dist * (1 + 1e-6) + 1e-12 * scale);
+    };
     auto advance = [&] {  // Bridson step around the accepted nodes (depth-first, newest first)
       while (!active.empty()) {
         const std::size_t k = active.size() - 3;
@@ -254,9 +259,8 @@ SurfaceSamplingStats place_surface_nodes(const SurfaceMesh& surface, const Sizin
         for (int tr = 0; tr < options.tries && !added; ++tr) {
           const double ang = rng.uniform(0, 2 * std::numbers::pi);
           const double rad = r * (1 + rng.uniform());
-          // h is g-Lipschitz and the try is rad from the active node, whose h is h0.
-          const double h_floor = active[k + 2] * (1 - 1e-9) - grad * (rad * (1 + 1e-6) + 1e-12 * scale);
-          added = try_add(x0 + rad * std::cos(ang), y0 + rad * std::sin(ang), h_floor);
+          // The try is rad from the active node, whose h is active[k + 2].
+          added = try_add(x0 + rad * std::cos(ang), y0 + rad * std::sin(ang), floor_at(active[k + 2], rad));
         }
         if (!added) active.resize(k);  // retire it (an addition pushed a new active node)
       }
@@ -278,7 +282,7 @@ SurfaceSamplingStats place_surface_nodes(const SurfaceMesh& surface, const Sizin
     }
     sweep_facet(a, b, c, bx, cx, cy, sizing, options.beta, stats, [&](double vv, double ww, double h_floor) {
       // h_floor: h's lower bound over the sweep's piece.
-      try_bary(vv, ww, vv * bx + ww * cx, ww * cy, h_floor * (1 - 1e-9) - grad * 1e-12 * scale);
+      try_bary(vv, ww, vv * bx + ww * cx, ww * cy, floor_at(h_floor, 0));
       advance();
     });
   }
