@@ -21,10 +21,12 @@
 #include <cstring>
 #include <exception>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 
 #include "core/error.h"
+#include "core/page_warmer.h"
 #include "core/rng.h"
 #include "core/timer.h"
 #include "core/uninit_allocator.h"
@@ -1136,9 +1138,22 @@ DelaunayResult delaunay(const PointSet& points, const Ordering& order,
   // Parallel rounds start once the first points (in kd-bfs order: a coarse cover of the
   // domain) are in, so that the tets straddling the slab boundaries are already small.
   const std::size_t prefix = threads > 1 && n - k >= 2 * kMinParallel ? std::max(k, n / 64) : n;
+  // Meanwhile the second core makes the pages of the next slots resident (the rounds' workers
+  // write about 7 slots a point from here on, in order; a first touch costs them 1.6-2.1 us a
+  // page). 1M cube points: about 70 MB of the rounds' 216 MB in the prefix's 26 ms. Should the
+  // prefix outgrow the reserve, the ranges are stale; populating keeps contents, so that is
+  // harmless.
+  std::optional<PageWarmer> warmer;
+  if (prefix < n) {
+    const std::size_t last = std::min(expect, 7 * n);
+    warmer.emplace(std::vector<PageWarmer::Range>{
+        {s.state.data() + s.state.size(), s.state.data() + last},
+        {s.T.data() + s.T.size(), s.T.data() + 8 * last}});
+  }
   insert_batched(
       kernel, prefix - k, [k](std::size_t i) { return std::uint32_t(k + i); }, hint_of,
       [](std::uint32_t) {}, report);
+  if (warmer) warmer->stop();
   k = prefix;
   if (k < n) {
     const std::vector<std::uint32_t> todo =
