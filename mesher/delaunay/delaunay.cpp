@@ -24,6 +24,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <tuple>
 
 #include "core/error.h"
 #include "core/page_warmer.h"
@@ -808,10 +809,14 @@ struct Slabs {
 /// axis will do.
 Slabs pick_slabs(const Store& s, const std::vector<std::uint32_t>& todo, const Directions& dirs,
                  const std::array<std::size_t, 2>& recent, unsigned threads) {
+  // Only the directions this round may take are measured (5 of the 7 after the second round).
+  std::vector<std::size_t> eligible;
+  for (std::size_t d = 0; d < dirs.size(); ++d)
+    if (d != recent[0] && d != recent[1]) eligible.push_back(d);
   std::vector<std::vector<double>> cuts(dirs.size());
   std::vector<double> key;
   const std::size_t stride = todo.size() / 20000 + 1;
-  for (std::size_t d = 0; d < dirs.size(); ++d) {
+  for (const std::size_t d : eligible) {
     key.clear();
     for (std::size_t i = 0; i < todo.size(); i += stride) key.push_back(along(dirs[d], s.P(todo[i])));
     for (unsigned w = 1; w < threads; ++w) {
@@ -822,10 +827,11 @@ Slabs pick_slabs(const Store& s, const std::vector<std::uint32_t>& todo, const D
   }
   // The sampled tets' counts, summed over the workers' shares (sums: the same on any count).
   const std::size_t m = s.num_tets(), tstride = m / 40000 + 1, samples = (m + tstride - 1) / tstride;
-  std::vector<std::vector<std::size_t>> part(threads, std::vector<std::size_t>(dirs.size(), 0));
+  std::vector<std::array<std::size_t, std::tuple_size_v<Directions>>> part(threads);
   parallel_for(
       samples,
       [&](std::size_t first, std::size_t last, unsigned w) {
+        std::array<std::size_t, std::tuple_size_v<Directions>> count{};  // not shared: no false sharing
         const std::size_t end = std::min(last * tstride, m);
         for (std::size_t t = first * tstride; t < end; t += tstride) {
           // Each sample is a cache miss, its vertices four more: start loading the record 16
@@ -841,25 +847,25 @@ Slabs pick_slabs(const Store& s, const std::vector<std::uint32_t>& todo, const D
           }
           const std::uint32_t* v = &s.T[8 * t];
           if (v[0] == kDead || v[0] == kInf || v[1] == kInf || v[2] == kInf || v[3] == kInf) continue;
-          for (std::size_t d = 0; d < dirs.size(); ++d) {
+          for (const std::size_t d : eligible) {
             double lo = HUGE_VAL, hi = -HUGE_VAL;
             for (int i = 0; i < 4; ++i) {
               const double x = along(dirs[d], s.P(v[i]));
               lo = std::min(lo, x);
               hi = std::max(hi, x);
             }
-            for (double c : cuts[d]) part[w][d] += lo < c && hi >= c;
+            for (double c : cuts[d]) count[d] += lo < c && hi >= c;
           }
         }
+        part[w] = count;
       },
       4096, threads);
-  std::vector<std::size_t> straddling(dirs.size(), 0);
-  for (const auto& p : part)
-    for (std::size_t d = 0; d < dirs.size(); ++d) straddling[d] += p[d];
-  std::size_t best = dirs.size();
-  for (std::size_t d = 0; d < dirs.size(); ++d)
-    if (d != recent[0] && d != recent[1] && (best == dirs.size() || straddling[d] < straddling[best]))
-      best = d;
+  std::size_t best = dirs.size(), fewest = 0;
+  for (const std::size_t d : eligible) {
+    std::size_t straddling = 0;
+    for (const auto& p : part) straddling += p[d];
+    if (best == dirs.size() || straddling < fewest) best = d, fewest = straddling;
+  }
   Slabs slabs{best, {-HUGE_VAL}};
   std::sort(cuts[best].begin(), cuts[best].end());
   slabs.cuts.insert(slabs.cuts.end(), cuts[best].begin(), cuts[best].end());
