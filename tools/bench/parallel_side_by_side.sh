@@ -11,7 +11,7 @@
 # Times are order + Delaunay as `kdmesh delaunay` reports them (CGAL: its insert(range), which
 # sorts internally). pair-a and pair-b are two sequential runs started together, one per core:
 # each one's slowdown against t1 bounds what a second thread can give. Writes summary.md (one
-# row per process) to OUT_DIR.
+# row per process, then each ratio per alternation and its median) to OUT_DIR.
 set -eu
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 K="$(realpath "${KDMESH:-$here/build/kdmesh}")"  # absolute: the runs cd to OUT_DIR
@@ -60,4 +60,26 @@ PY
     done
   done
 done
+# Per distribution, the ratios of each alternation and their medians: one thread against stock
+# CGAL, two threads against one, and the pair bound (twice the one-thread time over the slower
+# of the pair: what a second core gave two independent runs on this machine).
+python3 - >> summary.md <<'PY'
+import statistics
+rows = [l.split("|") for l in open("summary.md") if l.startswith("| ") and l.split("|")[3].strip().isdigit()]
+t = {}
+for r in rows:
+    t.setdefault(r[1].strip(), {}).setdefault(r[2].strip(), {})[int(r[3])] = float(r[4])
+print()
+print("| points | ratio | per alternation | median |")
+print("|---|---|---|---|")
+for dist, m in t.items():
+    reps = sorted(m["t1"])
+    ratios = {
+        "t1 / stock": [m["t1"][i] / m["stock"][i] for i in reps],
+        "t1 / t2": [m["t1"][i] / m["t2"][i] for i in reps],
+        "pair bound": [2 * m["t1"][i] / max(m["pair-a"][i], m["pair-b"][i]) for i in reps],
+    }
+    for name, v in ratios.items():
+        print(f"| {dist} | {name} | {', '.join('%.3f' % x for x in v)} | {statistics.median(v):.3f} |")
+PY
 cat summary.md
