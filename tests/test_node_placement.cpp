@@ -1036,5 +1036,24 @@ TEST(SizeFidelity, ReachCoversTheEdgesToLowerIds) {
   EXPECT_GT(want.hi, 40);  // edge (0, 2): 10.2 long, h = 0.1 + 0.3 * 0.51 at its midpoint
 }
 
+// A vertex in hundreds of tets: its edges' group holds more entries than the table of
+// DistinctSorter (mesher/distinct_sorter.h) takes, and the others' groups fewer; the figures
+// still equal the field's at every unique edge's midpoint.
+TEST(SizeFidelity, AVertexInHundredsOfTetsCountsEachEdgeOnce) {
+  PointSet p;
+  p.push_back(0, 0, 0);
+  Rng rng(5);
+  for (int i = 0; i < 150; ++i) p.push_back(rng.uniform(-3, 3), rng.uniform(-3, 3), rng.uniform(-3, 3));
+  std::vector<std::uint32_t> tets;
+  for (std::uint32_t i = 1; i + 2 < p.size(); ++i) tets.insert(tets.end(), {0, i, i + 1, i + 2});
+  for (std::uint32_t i = 1; i + 3 < p.size(); i += 3) tets.insert(tets.end(), {i + 3, i, 0, i + 1});
+  SurfaceMesh s;
+  s.points = p;
+  const SizingField h = point_zone_field(s, 1, 0.1, {0.5, 0, 0});
+  const FidelityByHand want = fidelity_by_hand(p, tets, h);
+  ASSERT_EQ(want.edges, 150u + 149u + 148u + 49u);  // (0, i); (i, i+1); (i, i+2); (i, i+3)
+  expect_fidelity_by_hand(measure_size_fidelity(p, tets, h), want);
+}
+
 }  // namespace
 }  // namespace kdmesh

@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "mesher/bucket_scatter.h"
+#include "mesher/distinct_sorter.h"
 #include "core/parallel_for.h"
 #include "core/uninit_allocator.h"
 
@@ -39,11 +40,8 @@ SizeFidelity measure_size_fidelity(const PointSet& points, const std::vector<std
   // edge in the order (a, b) ascending; v's unique edges are other[start[v] ..) up to the next.
   std::vector<std::size_t> uoff(np + 1, 0);
   parallel_for(np, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t v = b; v < e; ++v) {
-      const auto first = other.begin() + start[v], last = other.begin() + start[v + 1];
-      std::sort(first, last);
-      uoff[v + 1] = std::size_t(std::unique(first, last) - first);
-    }
+    DistinctSorter distinct;
+    for (std::size_t v = b; v < e; ++v) uoff[v + 1] = distinct(other.data() + start[v], start[v + 1] - start[v]);
   }, 1024);
   for (std::size_t v = 0; v < np; ++v) uoff[v + 1] += uoff[v];
   const std::size_t ne = uoff[np];
