@@ -16,7 +16,8 @@ import tempfile
 # mesher/'s top-level files: shared ground every stage may use, the domain bundle, and the
 # front door over all stages.
 MESHER_TOP = {
-    "node_set": "mesher/base", "bucket_scatter": "mesher/base", "worker_team": "mesher/base", "tet_quality": "mesher/base",
+    "node_set": "mesher/base", "bucket_scatter": "mesher/base", "distinct_sorter": "mesher/base",
+    "worker_team": "mesher/base", "tet_quality": "mesher/base",
     "domain": "mesher/domain",
     "mesh_solid": "mesher/front", "resource_estimate": "mesher/front",
     "numeric_ranges": "mesher/front",
