@@ -31,6 +31,7 @@ PACKAGES=(
   libcgal-dev
   libclang-rt-14-dev
   libcli11-dev
+  libdeflate-dev
   libeigen3-dev
   libfmt-dev
   libgmp-dev
