@@ -48,11 +48,13 @@ struct Triangulation {
   }
 };
 
-/// A named per-point or per-cell data array for writers (one component per entry).
+/// A named per-point or per-cell data array for writers (one component per entry): 64-bit
+/// reals, else 32-bit floats, else ints, whichever is not empty first.
 struct DataArray {
   std::string name;
-  std::vector<std::int32_t> ints;   ///< used when `reals` is empty
+  std::vector<std::int32_t> ints;   ///< used when `reals` and `floats` are empty
   std::vector<double> reals;
+  std::vector<float> floats = {};   ///< used when `reals` is empty (VTU: Float32)
 };
 
 /// A finite tetrahedral mesh: what writers consume and what comparisons use.

@@ -100,15 +100,16 @@ AppendedArray in_memory(const char* type, const std::string& name, int component
           reinterpret_cast<const unsigned char*>(v.data()), {}, ArrayCodec::libdeflate};
 }
 
-/// A data array of `mesh` (Float64 if it has reals, else Int32), checked to have `expected`
-/// entries; `kind` ("point" / "cell") names the association in errors.
+/// A data array of `mesh` (Float64 if it has reals, else Float32 if it has floats, else Int32),
+/// checked to have `expected` entries; `kind` ("point" / "cell") names the association in errors.
 AppendedArray data_array(const DataArray& a, std::size_t expected, const char* kind) {
-  const std::size_t n = a.reals.empty() ? a.ints.size() : a.reals.size();
+  const std::size_t n = !a.reals.empty() ? a.reals.size() : !a.floats.empty() ? a.floats.size() : a.ints.size();
   if (n != expected)
     throw UsageError("write_vtu: " + std::string(kind) + " data array '" + a.name + "' has " +
                      std::to_string(n) + " values, expected " + std::to_string(expected) +
                      " (one per " + kind + ")");
   if (!a.reals.empty()) return in_memory("Float64", a.name, 1, a.reals, range_of(a.reals.data(), n));
+  if (!a.floats.empty()) return in_memory("Float32", a.name, 1, a.floats, range_of(a.floats.data(), n));
   return in_memory("Int32", a.name, 1, a.ints, range_of(a.ints.data(), n));
 }
 

@@ -7,6 +7,7 @@
 #include <vtkCellType.h>
 #include <vtkDataArray.h>
 #include <vtkDoubleArray.h>
+#include <vtkFloatArray.h>
 #include <vtkIdList.h>
 #include <vtkIntArray.h>
 #include <vtkNew.h>
@@ -77,6 +78,7 @@ TetMesh small_mesh() {
       {"height", {}, {0.1 + 0.2, -0.0, 1e300, std::numeric_limits<double>::denorm_min(), 7}});
   m.cell_data.push_back({"region", {1, std::numeric_limits<std::int32_t>::max()}, {}});
   m.cell_data.push_back({"quality", {}, {1.0 / 3.0, 2.0 / 3.0}});
+  m.cell_data.push_back({"angle", {}, {}, {1.0f / 3.0f, -std::numeric_limits<float>::denorm_min()}});
   return m;
 }
 
@@ -104,7 +106,14 @@ vtkSmartPointer<vtkUnstructuredGrid> read_back(const std::string& path) {
 void expect_array(vtkDataArray* got, const DataArray& want) {
   ASSERT_NE(got, nullptr) << "array '" << want.name << "' missing";
   EXPECT_EQ(got->GetNumberOfComponents(), 1);
-  if (!want.reals.empty()) {
+  if (want.reals.empty() && !want.floats.empty()) {
+    auto* f = vtkFloatArray::SafeDownCast(got);
+    ASSERT_NE(f, nullptr) << want.name << " is " << got->GetClassName() << ", expected vtkFloatArray";
+    ASSERT_EQ(std::size_t(f->GetNumberOfTuples()), want.floats.size());
+    for (std::size_t i = 0; i < want.floats.size(); ++i)
+      EXPECT_EQ(std::bit_cast<std::uint32_t>(f->GetValue(vtkIdType(i))), std::bit_cast<std::uint32_t>(want.floats[i]))
+          << want.name << "[" << i << "]";
+  } else if (!want.reals.empty()) {
     auto* d = vtkDoubleArray::SafeDownCast(got);
     ASSERT_NE(d, nullptr) << want.name << " is " << got->GetClassName()
                           << ", expected vtkDoubleArray";
@@ -200,6 +209,10 @@ std::string vtk_writer_output(const TetMesh& m) {
       auto d = vtkSmartPointer<vtkDoubleArray>::New();
       for (double x : a.reals) d->InsertNextValue(x);
       arr = d;
+    } else if (!a.floats.empty()) {
+      auto d = vtkSmartPointer<vtkFloatArray>::New();
+      for (float x : a.floats) d->InsertNextValue(x);
+      arr = d;
     } else {
       auto d = vtkSmartPointer<vtkIntArray>::New();
       for (int x : a.ints) d->InsertNextValue(x);
@@ -274,10 +287,12 @@ TEST(Vtu, AppendedBlocksDecodeToWhatVtksOwnWriterCompresses) {
     for (std::size_t i = 0; i < n; ++i) m.point_data.back().ints.push_back(std::int32_t(i % 97) - 40);
     m.cell_data.push_back({"q", {}, {}});
     for (std::size_t t = 0; t < m.num_tets(); ++t) m.cell_data.back().reals.push_back(std::sin(double(t)));
+    m.cell_data.push_back({"q32", {}, {}});
+    for (std::size_t t = 0; t < m.num_tets(); ++t) m.cell_data.back().floats.push_back(float(std::cos(double(t))));
     const std::string path = scratch(".vtu");
     write_vtu(m, path);
     const std::vector<DecodedArray> ours = decoded_arrays(slurp(path)), vtks = decoded_arrays(vtk_writer_output(m));
-    ASSERT_EQ(ours.size(), 6u) << n;  // id, q, Points, connectivity, offsets, types
+    ASSERT_EQ(ours.size(), 7u) << n;  // id, q, q32, Points, connectivity, offsets, types
     ASSERT_EQ(ours.size(), vtks.size()) << n;
     std::uint64_t blocks = 0;
     for (std::size_t i = 0; i < ours.size(); ++i) {

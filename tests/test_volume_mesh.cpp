@@ -642,7 +642,9 @@ TEST(VolumeMesh, ToTetMeshCarriesTheData) {
   ASSERT_EQ(tm.point_data[0].ints.size(), vm.nodes.points.size());
   for (std::size_t i = 0; i < vm.nodes.points.size(); ++i) {
     EXPECT_EQ(tm.point_data[0].ints[i], int(vm.nodes.kind[i]));
-    EXPECT_DOUBLE_EQ(tm.point_data[1].reals[i], 0.25);
+    ASSERT_EQ(tm.point_data[1].floats.size(), vm.nodes.points.size());
+    EXPECT_EQ(tm.point_data[1].floats[i], vm.nodes.size[i]);
+    EXPECT_EQ(tm.point_data[1].floats[i], 0.25f);
   }
   ASSERT_EQ(tm.cell_data.size(), 3u);
   EXPECT_EQ(tm.cell_data[0].name, "region");
@@ -651,9 +653,13 @@ TEST(VolumeMesh, ToTetMeshCarriesTheData) {
   for (std::size_t t = 0; t < tm.num_tets(); ++t) {
     const std::uint32_t* v = &tm.tets[4 * t];
     const TetQuality tq = tet_quality(tm.points.p(v[0]), tm.points.p(v[1]), tm.points.p(v[2]), tm.points.p(v[3]));
-    EXPECT_EQ(tm.cell_data[1].reals[t], tq.min_dihedral);
-    EXPECT_GT(tm.cell_data[1].reals[t], 0);
-    EXPECT_GT(tm.cell_data[2].reals[t], 0);
+    // Float32 in the file: each tet's measure rounded once to 32 bits.
+    ASSERT_EQ(tm.cell_data[1].floats.size(), tm.num_tets());
+    ASSERT_EQ(tm.cell_data[2].floats.size(), tm.num_tets());
+    EXPECT_EQ(tm.cell_data[1].floats[t], float(tq.min_dihedral));
+    EXPECT_EQ(tm.cell_data[2].floats[t], float(tq.radius_ratio));
+    EXPECT_GT(tm.cell_data[1].floats[t], 0);
+    EXPECT_GT(tm.cell_data[2].floats[t], 0);
   }
 }
 

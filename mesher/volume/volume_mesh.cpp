@@ -848,22 +848,21 @@ TetMesh to_tet_mesh(const VolumeMesh& mesh, QualitySummary* summary, const TetQu
   const std::size_t n = mesh.nodes.size_count(), nt = mesh.num_tets();
   DataArray kind{"node_kind", {}, {}}, size{"target_size", {}, {}};
   kind.ints.resize(n);
-  size.reals.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    kind.ints[i] = std::int32_t(mesh.nodes.kind[i]);
-    size.reals[i] = double(mesh.nodes.size[i]);
-  }
+  size.floats.assign(mesh.nodes.size.begin(), mesh.nodes.size.end());  // the nodes' own floats
+  for (std::size_t i = 0; i < n; ++i) kind.ints[i] = std::int32_t(mesh.nodes.kind[i]);
   m.point_data.push_back(std::move(kind));
   m.point_data.push_back(std::move(size));
   DataArray region{"region", {}, {}}, dih{"min_dihedral", {}, {}}, rr{"radius_ratio", {}, {}};
   region.ints.resize(nt);
   for (std::size_t t = 0; t < nt; ++t)
     region.ints[t] = t < mesh.tet_region.size() ? std::int32_t(mesh.tet_region[t]) : 0;
-  dih.reals.resize(nt);
-  rr.reals.resize(nt);
+  // Per-tet measures to look at, not to compute with: Float32 (the summary's figures come from
+  // the doubles). The paper gear box's VTU: 508 -> 348 MB, its write 4.1 -> 2.9 s.
+  dih.floats.resize(nt);
+  rr.floats.resize(nt);
   const QualitySummary s = summarize_quality(m.points, m.tets, [&](std::size_t t, const TetQuality& q) {
-    dih.reals[t] = q.min_dihedral;
-    rr.reals[t] = q.radius_ratio;
+    dih.floats[t] = float(q.min_dihedral);
+    rr.floats[t] = float(q.radius_ratio);
     if (each) each(t, q);
   });
   if (summary) *summary = s;

@@ -85,8 +85,9 @@ struct VolumeMesh {
 VolumeMesh mesh_volume(const Domain& domain, NodeSet nodes,
                        const VolumeMeshOptions& options = {});
 
-/// The mesh as writers take it: points, tets, point data "node_kind" and "target_size",
-/// cell data "region", "min_dihedral", "radius_ratio". The cell data's per-tet measures
+/// The mesh as writers take it: points, tets, point data "node_kind" (ints) and "target_size"
+/// (floats), cell data "region" (ints), "min_dihedral" and "radius_ratio" (floats: each tet's
+/// measure rounded to 32 bits; the summary is of the doubles). The cell data's per-tet measures
 /// also give their summary (to *summary if not null) and go to `each` if set: one pass.
 TetMesh to_tet_mesh(const VolumeMesh& mesh, QualitySummary* summary = nullptr,
                     const TetQualityVisitor& each = {});
