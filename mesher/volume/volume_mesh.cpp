@@ -848,8 +848,11 @@ TetMesh to_tet_mesh(const VolumeMesh& mesh, QualitySummary* summary, const TetQu
   const std::size_t n = mesh.nodes.size_count(), nt = mesh.num_tets();
   DataArray kind{"node_kind", {}, {}}, size{"target_size", {}, {}};
   kind.ints.resize(n);
-  size.floats.assign(mesh.nodes.size.begin(), mesh.nodes.size.end());  // the nodes' own floats
-  for (std::size_t i = 0; i < n; ++i) kind.ints[i] = std::int32_t(mesh.nodes.kind[i]);
+  size.floats.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    kind.ints[i] = std::int32_t(mesh.nodes.kind[i]);
+    size.floats[i] = mesh.nodes.size[i];  // the nodes' own floats
+  }
   m.point_data.push_back(std::move(kind));
   m.point_data.push_back(std::move(size));
   DataArray region{"region", {}, {}}, dih{"min_dihedral", {}, {}}, rr{"radius_ratio", {}, {}};
