@@ -555,9 +555,15 @@ TEST(ManifoldDefects, SameAsSortingEveryEdgeAndCornerOnDamagedSpheres) {
     EXPECT_EQ(got_sparse.bad_vertices, want_sparse.bad_vertices) << "round " << round;
     EXPECT_EQ(got_sparse.faces_at_bad_vertices, want_sparse.faces_at_bad_vertices) << "round " << round;
     EXPECT_EQ(got_sparse.bad_edges.size(), got.bad_edges.size());
-    if (round == 0) EXPECT_TRUE(want.bad_edges.empty() && want.bad_vertices.empty());
-    if (round >= 1) EXPECT_FALSE(want.bad_edges.empty()) << "round " << round;
-    if (round % 2 == 1) EXPECT_FALSE(want.bad_vertices.empty()) << "round " << round;
+    if (round == 0) {
+      EXPECT_TRUE(want.bad_edges.empty() && want.bad_vertices.empty());
+    }
+    if (round >= 1) {
+      EXPECT_FALSE(want.bad_edges.empty()) << "round " << round;
+    }
+    if (round % 2 == 1) {
+      EXPECT_FALSE(want.bad_vertices.empty()) << "round " << round;
+    }
   }
   EXPECT_TRUE(manifold_defects({}).bad_edges.empty());
   // The largest id: one triangle, its three edges in one face each.
