@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "core/error.h"
 #include "core/parallel_collect.h"
@@ -14,23 +15,51 @@
 namespace kdmesh {
 
 std::vector<std::uint32_t> label_regions(const Triangulation& tri, const NodeSet& nodes, const Domain& domain,
-                                         const std::vector<std::uint8_t>& inside, std::size_t* queries) {
+                                         const std::vector<std::uint8_t>& inside, std::size_t* queries,
+                                         const TetMemo* memo, std::vector<TetMemo::Asked>* asked_tets,
+                                         std::vector<std::int32_t>* node_regions) {
   if (!domain.regions) throw UsageError("label_regions: the domain has no region queries");
   const RegionQuery& rq = *domain.regions;
   const std::size_t n = tri.num_tets(), nn = nodes.size_count();
-  std::vector<std::int32_t> node_region(nn, -1);
-  parallel_for(nn, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t i = b; i < e; ++i)
+  std::vector<std::int32_t> own_node_regions;
+  std::vector<std::int32_t>& node_region = node_regions ? *node_regions : own_node_regions;
+  if (node_region.size() > nn)
+    throw UsageError("label_regions: the node regions given are for " + std::to_string(node_region.size()) +
+                     " nodes, but there are " + std::to_string(nn));
+  const std::size_t known = node_region.size();
+  node_region.resize(nn, -1);
+  parallel_for(nn - known, [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t i = known + b; i < known + e; ++i)
       if (nodes.kind[i] == NodeKind::interior) node_region[i] = rq.region(nodes.points.p(std::uint32_t(i)));
   }, 1024);
   std::size_t asked = 0;
-  for (std::size_t i = 0; i < nn; ++i) asked += nodes.kind[i] == NodeKind::interior;
+  for (std::size_t i = known; i < nn; ++i) asked += nodes.kind[i] == NodeKind::interior;
   auto own = [&](std::uint32_t t) {
     double c[3];
     for (int k = 0; k < 3; ++k)
       c[k] = (nodes.points.p(tri.v(t, 0))[k] + nodes.points.p(tri.v(t, 1))[k] + nodes.points.p(tri.v(t, 2))[k] +
               nodes.points.p(tri.v(t, 3))[k]) / 4;
     return rq.region(c);
+  };
+  // own() of every tet of `wave` into `answer`: from the memo where it knows the tet, asked
+  // (and listed in asked_tets) otherwise.
+  if (asked_tets) asked_tets->clear();
+  std::vector<std::uint8_t> fresh;
+  auto ask = [&](const std::vector<std::uint32_t>& wave, std::vector<std::int32_t>& answer) {
+    answer.assign(wave.size(), 0);
+    fresh.assign(wave.size(), 1);
+    parallel_for(wave.size(), [&](std::size_t b, std::size_t e, unsigned) {
+      for (std::size_t k = b; k < e; ++k) {
+        const std::int32_t m = memo ? memo->find(&tri.data[8 * std::size_t(wave[k])]) : TetMemo::kNone;
+        fresh[k] = m == TetMemo::kNone;
+        answer[k] = fresh[k] ? own(wave[k]) : m;
+      }
+    }, 256);
+    for (std::size_t k = 0; k < wave.size(); ++k) {
+      if (!fresh[k]) continue;
+      ++asked;
+      if (asked_tets) asked_tets->push_back({wave[k], answer[k]});
+    }
   };
   std::vector<std::uint32_t> label(n, kNoRegion);
   std::vector<std::uint8_t> verified(n, 0);
@@ -49,11 +78,8 @@ std::vector<std::uint32_t> label_regions(const Triangulation& tri, const NodeSet
     return !(r >= 0 && !mixed);
   });
   // The first wave: tets without a body yet, then those next to a tet of another body.
-  std::vector<std::int32_t> answer(wave.size());
-  parallel_for(wave.size(), [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t k = b; k < e; ++k) answer[k] = own(wave[k]);
-  }, 256);
-  asked += wave.size();
+  std::vector<std::int32_t> answer;
+  ask(wave, answer);
   for (std::size_t k = 0; k < wave.size(); ++k) {
     verified[wave[k]] = 1;
     // On an interface or outside by rounding: the body of a neighbour decides below.
@@ -69,11 +95,7 @@ std::vector<std::uint32_t> label_regions(const Triangulation& tri, const NodeSet
   });
   while (!wave.empty()) {
     for (std::uint32_t t : wave) verified[t] = 1;
-    answer.assign(wave.size(), 0);
-    parallel_for(wave.size(), [&](std::size_t b, std::size_t e, unsigned) {
-      for (std::size_t k = b; k < e; ++k) answer[k] = own(wave[k]);
-    }, 256);
-    asked += wave.size();
+    ask(wave, answer);
     std::vector<std::uint32_t> next;
     for (std::size_t k = 0; k < wave.size(); ++k) {
       const std::uint32_t t = wave[k];

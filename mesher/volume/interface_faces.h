@@ -9,6 +9,7 @@
 #include "core/tet_mesh.h"
 #include "mesher/domain.h"
 #include "mesher/node_set.h"
+#include "mesher/volume/tet_memo.h"
 
 namespace kdmesh {
 
@@ -19,8 +20,14 @@ inline constexpr std::uint32_t kNoRegion = 0xFFFFFFFFu;
 /// every other inside tet and every tet next to one of another body asks for its own centroid,
 /// and a tet whose answer differs exposes its neighbours to the same test, until nothing
 /// changes. `queries` (optional) counts the region queries made.
+/// Optional memos, valid while the node ids are (the caller clears them when they change):
+/// `memo` holds the tets' answers of earlier calls, and `asked` takes the tets asked now with
+/// their answers; `node_regions` holds the regions of the nodes below its size (-1: not
+/// interior) and is extended to all nodes.
 std::vector<std::uint32_t> label_regions(const Triangulation& tri, const NodeSet& nodes, const Domain& domain,
-                                         const std::vector<std::uint8_t>& inside, std::size_t* queries = nullptr);
+                                         const std::vector<std::uint8_t>& inside, std::size_t* queries = nullptr,
+                                         const TetMemo* memo = nullptr, std::vector<TetMemo::Asked>* asked = nullptr,
+                                         std::vector<std::int32_t>* node_regions = nullptr);
 
 /// Faces between inside tets of two different regions, each once: the face of `tet` (the tet
 /// of the lower region) opposite its vertex `face`, normal pointing out of it.
