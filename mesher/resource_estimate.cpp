@@ -157,12 +157,12 @@ void take_cell(const Cell& x, const SurfaceQuery& q, const SizingField& h, Resou
   if (x.sd <= -rho) return;  // wholly outside
   // Bounds of h over the cell, from its centre: the cell lies in the ball of radius rho
   // around it, where h is at least the field with every zone's distance shortened by rho
-  // (SizingField::lower_bound) and at most h(c) + g rho (h is g-Lipschitz). Two queries; the
-  // 8 corners sampled instead took 9 in all (the paper gear box's estimate: 4.3-5.2 s, most of
-  // it these queries, on two cores; 2.7-2.8 s now).
-  const double hlo = std::min(x.hc, h.lower_bound(x.c, rho));
+  // (SizingField::lower_bound, given h(c): one query) and at most h(c) + g rho (h is
+  // g-Lipschitz). The 8 corners sampled instead took 9 queries in all (the paper gear box's
+  // estimate: 4.3-5.2 s, most of it these queries, on two cores; 2.7-2.8 s with two).
+  const double hlo = std::min(x.hc, h.lower_bound(x.c, rho, x.hc));
   const double hhi = h_upper(h, x.hc, rho);
-  e.samples += 2;
+  ++e.samples;
   const bool crossed = x.sd < rho;
   const bool uniform = hhi <= 1.15 * hlo;
   if ((uniform && (!crossed || rho <= 4 * hlo)) || rho <= 1.5 * hlo) {

@@ -68,8 +68,8 @@ struct SizingField::Impl {
 
   /// h at x (reach 0), or a lower bound of h over the ball of radius reach around x: every
   /// term is size + g * distance, and a point within reach of x is at most reach closer.
-  double eval(const double* x, double reach = 0) const {
-    double best = h_max;
+  double eval(const double* x, double reach = 0, double start = HUGE_VAL) const {
+    double best = std::min(h_max, start);
     for (const BoxZone& b : boxes) {
       if (!(b.size < best)) continue;
       double d2 = 0;
@@ -107,11 +107,19 @@ struct SizingField::Impl {
   /// point of such a cell is then h_max exactly, as eval would compute it, at the cost of a
   /// table lookup. Away from zones most evaluations fall there (pinion.ply at one size: 98% of
   /// its edges' midpoints). One byte per cell, at most ~128^3 cells: 0 not yet known, 1 h_max
-  /// throughout, 2 not. Written by whichever thread first asks (the same value by any).
+  /// throughout, 2 not, 3 not and h at its centre known. Written by whichever thread first
+  /// asks (the same value by any).
+  /// In a cell that is not clear, h(centre) + g |x - centre| bounds h(x) from above (h is
+  /// g-Lipschitz), and the zones' search starts from it rather than from h_max: it prunes at
+  /// once what cannot come below it. The search's minimum is the same (the bound is above it,
+  /// with a margin far above the rounding of either). On occt_sh2.stl at 355k tets (8,375
+  /// thickness, crease and edge segments) the BVH visited 33 nodes and 26 segments a query
+  /// where it visited 37 and 32.
   struct ClearCells {
     double lo[3] = {0, 0, 0}, inv = 0, radius = 0;
     int n[3] = {0, 0, 0};
     std::unique_ptr<std::uint8_t[]> state;
+    std::unique_ptr<double[]> centre_h;  // h at the centre of a cell whose state is 3
   };
   mutable ClearCells clear;
 
@@ -133,6 +141,7 @@ struct SizingField::Impl {
     clear.inv = 1 / cell;
     clear.radius = 0.5 * std::sqrt(3.0) * cell;
     clear.state.reset(new std::uint8_t[std::size_t(clear.n[0]) * clear.n[1] * clear.n[2]]());
+    clear.centre_h.reset(new double[std::size_t(clear.n[0]) * clear.n[1] * clear.n[2]]);
   }
 
   double value(const double* x) const {
@@ -146,17 +155,31 @@ struct SizingField::Impl {
       centre[k] = clear.lo[k] + (f + 0.5) / clear.inv;
     }
     std::atomic_ref<std::uint8_t> st(clear.state[c]);
-    std::uint8_t known = st.load(std::memory_order_relaxed);
+    std::uint8_t known = st.load(std::memory_order_acquire);
+    const double scale = std::fabs(centre[0]) + std::fabs(centre[1]) + std::fabs(centre[2]) +
+                         std::fabs(clear.lo[0]) + std::fabs(clear.lo[1]) + std::fabs(clear.lo[2]);
     if (known == 0) {
       // The ball around the centre holds the cell (and x, whatever the rounding of its cell
       // index: the margins are far above it).
-      const double scale = std::fabs(centre[0]) + std::fabs(centre[1]) + std::fabs(centre[2]) +
-                           std::fabs(clear.lo[0]) + std::fabs(clear.lo[1]) + std::fabs(clear.lo[2]);
       const double reach = clear.radius * (1 + 1e-6) + 1e-12 * scale;
       known = eval(centre, reach) < h_max ? 2 : 1;
       st.store(known, std::memory_order_relaxed);
     }
-    return known == 1 ? h_max : eval(x);
+    if (known == 1) return h_max;
+    // (A thread that sees 3 sees the centre's value stored before it; several threads may
+    // store it, all the same value.)
+    std::atomic_ref<double> ch(clear.centre_h[c]);
+    double hc;
+    if (known == 2) {
+      hc = eval(centre);
+      ch.store(hc, std::memory_order_relaxed);
+      st.store(3, std::memory_order_release);
+    } else {
+      hc = ch.load(std::memory_order_relaxed);
+    }
+    const double dx = x[0] - centre[0], dy = x[1] - centre[1], dz = x[2] - centre[2];
+    const double ub = (hc + g * std::sqrt(dx * dx + dy * dy + dz * dz)) * (1 + 1e-12) + 1e-12 * g * scale;
+    return eval(x, 0, ub);
   }
 };
 
@@ -177,6 +200,11 @@ double SizingField::lower_bound(const double* x, double radius) const {
   // g-Lipschitz). The first is the tighter far from zones, the second beside a plane zone,
   // whose in-region term the first takes wherever the plane is in reach.
   return std::max(impl_->eval(x, radius), impl_->eval(x) - impl_->g * radius);
+}
+double SizingField::lower_bound(const double* x, double radius, double h_at_x) const {
+  if (!impl_) empty_field();
+  if (!(radius > 0)) return h_at_x;
+  return std::max(impl_->eval(x, radius), h_at_x - impl_->g * radius);
 }
 double SizingField::max_size() const {
   if (!impl_) empty_field();

@@ -71,6 +71,9 @@ class SizingField {
   /// distance shortened by the radius (attained for a lone point zone; h_max far from every
   /// zone, where h(x) - g radius may be below h_min). Equals h(x) at radius 0.
   double lower_bound(const double* x, double radius) const;
+  /// lower_bound(x, radius) from h(x) the caller already has (`h_at_x`, exactly what
+  /// operator() returned at x): one zone query fewer.
+  double lower_bound(const double* x, double radius, double h_at_x) const;
   double max_size() const;
   double min_size() const;
   const SizingOptions& options() const;

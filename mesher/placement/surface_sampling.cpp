@@ -130,7 +130,7 @@ void sweep_facet(const double* a, const double* b, const double* c, double bx, d
     double pc[3];
     for (int k = 0; k < 3; ++k) pc[k] = a[k] + vc * (b[k] - a[k]) + wc * (c[k] - a[k]);
     const double hc = sizing(pc);
-    const double h_lo = sizing.lower_bound(pc, D);  // the piece lies within D of pc
+    const double h_lo = sizing.lower_bound(pc, D, hc);  // the piece lies within D of pc
     const double step = 0.5 * beta * std::max(hfloor, h_lo);
     if (q.depth < kMaxSweepDepth && D > step && (D > 8 * beta * hc || h_lo < 0.5 * hc)) {
       Piece p0 = q, p1 = q;
