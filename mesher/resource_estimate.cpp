@@ -138,7 +138,13 @@ Cell make_cell(const double* c, double r, double parent_sd, const SurfaceQuery& 
   const double rho = r * std::sqrt(3.0);
   ++e.samples;
   if (std::isnan(parent_sd)) {
-    const double d = q.distance(x.c);
+    // Only a cell the surface crosses needs its centre's distance. One farther from the
+    // surface than its half diagonal rho lies wholly on one side, and every figure of it and
+    // of its children is that of |sd| = rho (they test sd against +-rho and pass their
+    // children sd -+ rho / 2, their own half diagonals; the fraction inside is 0 or 1). On
+    // thin-walled parts most cells are near the surface: the distance queries were 0.3 of the
+    // estimate's 1.2 CPU-s on occt_sh2.stl.
+    const double d = q.within(x.c, rho) ? q.distance(x.c) : rho;
     x.sd = q.side(x.c) > 0 ? d : -d;
     e.samples += 2;
   }

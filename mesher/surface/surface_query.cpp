@@ -676,6 +676,14 @@ bool SurfaceQuery::within(const double* p, double r, const double* hint) const {
   return distance(p, hint) <= r;
 }
 
+bool SurfaceQuery::within(const double* p, double r) const {
+  if (std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]) && r >= 0 && std::isfinite(r)) {
+    const int v = impl_->boxes.within(p, r);
+    if (v >= 0) return v == 1;
+  }
+  return distance(p) <= r;
+}
+
 double SurfaceQuery::distance(const double* p, const double* hint) const {
   const K::Point_3 q(p[0], p[1], p[2]), h(hint[0], hint[1], hint[2]);
   return std::sqrt(impl_->tree.squared_distance(q, h));

@@ -31,6 +31,8 @@ class SurfaceQuery {
   /// distance(p, hint) <= r, the same answer, from the facet grid where no rounding can
   /// matter (the tree otherwise).
   bool within(const double* p, double r, const double* hint) const;
+  /// distance(p) <= r, likewise.
+  bool within(const double* p, double r) const;
   /// Distance from `origin` along the ray in direction `dir` (not necessarily unit) to its
   /// first crossing with a facet other than `skip` (kNoFacet: none skipped), in units of
   /// |dir|; +infinity when the ray meets no other facet. The facet hit goes to *hit (if not
