@@ -404,5 +404,29 @@ TEST(SurfaceQuery, WithinIsTheHintedDistanceComparedWithTheRadius) {
   EXPECT_GT(no, 20000);
 }
 
+// within(p, r) is distance(p) <= r likewise: the resource estimate asks it of its cells'
+// centres with their half diagonals (near the surface and far off it, large and small radii).
+TEST(SurfaceQuery, WithinIsTheDistanceComparedWithTheRadius) {
+  const SurfaceMesh s = sphere(10, 3);
+  const SurfaceQuery q(s);
+  Rng rng(17);
+  int yes = 0, no = 0;
+  for (int i = 0; i < 20000; ++i) {
+    double p[3];
+    const double* v = s.points.p(std::uint32_t(rng.uniform(0, double(s.points.size()) - 1e-9)));
+    const double spread = i % 4 == 0 ? 12.0 : 0.4;
+    for (int k = 0; k < 3; ++k) p[k] = v[k] + rng.uniform(-spread, spread);
+    const double d = q.distance(p);
+    for (const double r : {d, std::nextafter(d, 0.0), std::nextafter(d, INFINITY), d * 0.9, d * 1.1, 0.5 * d + 0.1,
+                           0.0, 25.0}) {
+      const bool want = d <= r;
+      ASSERT_EQ(q.within(p, r), want) << "point " << i << " r " << r << " d " << d;
+      (want ? yes : no) += 1;
+    }
+  }
+  EXPECT_GT(yes, 20000);
+  EXPECT_GT(no, 20000);
+}
+
 }  // namespace
 }  // namespace kdmesh
