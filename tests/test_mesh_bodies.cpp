@@ -22,6 +22,7 @@
 #include "mesher/tet_quality.h"
 #include "mesher/volume/volume_mesh.h"
 #include "tests/support/box_surface.h"
+#include "tests/support/touching_boxes.h"
 
 namespace kdmesh {
 namespace {
@@ -385,17 +386,10 @@ TEST(MeshBodies, BadBodyListsAreUsageErrors) {
 // Here: boxes [0,1]^3 and [1,2]x[0,1]^2, nodes on a lattice of spacing 0.1, those of the
 // interface x = 1 one ulp off it at random.
 TEST(MeshBodies, FlatTetsOfInterfaceNodesAreSplitNotCarvedOut) {
-  std::vector<PreparedSurface> parts;
-  parts.push_back(prepare_surface(box_surface({0, 0, 0}, {1, 1, 1}), "a.stl"));
-  parts.push_back(prepare_surface(box_surface({1, 0, 0}, {2, 1, 1}), "b.stl"));
-  const PreparedSurface s = join_bodies(std::move(parts), {"a", "b"}, {"a.stl", "b.stl"});
-  ASSERT_FALSE(s.interfaces.empty());
-  const SurfaceQuery q(s.mesh);
-  const RegionQuery rq(s);
-  SizingOptions so;
-  so.max_size = 0.1;
-  const SizingField sizing = build_sizing_field(s.mesh, so);
-  const Domain domain{s, q, sizing, &rq};
+  const test::TouchingBoxes boxes;
+  ASSERT_FALSE(boxes.surface.interfaces.empty());
+  const SurfaceQuery& q = boxes.query;
+  const Domain domain = boxes.domain();
 
   NodeSet nodes;
   Rng rng(7);

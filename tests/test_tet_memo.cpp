@@ -13,14 +13,9 @@
 #include "core/rng.h"
 #include "mesher/delaunay/delaunay.h"
 #include "mesher/order/order.h"
-#include "mesher/surface/region_query.h"
-#include "mesher/surface/surface_bodies.h"
-#include "mesher/surface/surface_prepare.h"
-#include "mesher/surface/surface_query.h"
 #include "mesher/volume/interface_faces.h"
 #include "mesher/volume/tet_memo.h"
-#include "sizing/sizing_field.h"
-#include "tests/support/box_surface.h"
+#include "tests/support/touching_boxes.h"
 
 namespace kdmesh {
 namespace {
@@ -77,16 +72,8 @@ TEST(TetMemo, FindsEachAnswerByTheOrderedVertexIds) {
 // label_regions on two touching boxes: a call that reads the answers and node regions of an
 // earlier one asks nothing and labels every tet as asking again does.
 TEST(TetMemo, LabelRegionsFromTheMemoEqualsAskingAgain) {
-  std::vector<PreparedSurface> parts;
-  parts.push_back(prepare_surface(test::box_surface({0, 0, 0}, {1, 1, 1}), "a.stl"));
-  parts.push_back(prepare_surface(test::box_surface({1, 0, 0}, {2, 1, 1}), "b.stl"));
-  const PreparedSurface s = join_bodies(std::move(parts), {"a", "b"}, {"a.stl", "b.stl"});
-  const SurfaceQuery q(s.mesh);
-  const RegionQuery rq(s);
-  SizingOptions so;
-  so.max_size = 0.1;
-  const SizingField sizing = build_sizing_field(s.mesh, so);
-  const Domain domain{s, q, sizing, &rq};
+  const test::TouchingBoxes boxes;
+  const Domain domain = boxes.domain();
   // Jittered lattice nodes, those on the interface x = 1 surface-kind: tets across it have
   // nodes of both bodies and ask for their centroids.
   NodeSet nodes;
