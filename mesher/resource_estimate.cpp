@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
 #include "core/error.h"
 #include "core/parallel_for.h"
+#include "mesher/point_values.h"
 
 namespace kdmesh {
 
@@ -81,8 +83,10 @@ void integrate_surface(const SurfaceMesh& m, const SizingField& h, ResourceEstim
   parallel_for(nf, [&](std::size_t fb, std::size_t fe, unsigned) {
     std::vector<Tri> stack;
     ResourceEstimate local;
+    PointValues corners;  // h at the facet's corners: each split's midpoints serve several triangles
     for (std::size_t f = fb; f < fe && !watch.capped.load(std::memory_order_relaxed); ++f) {
       local = {};
+      corners.clear();
       stack.assign(1, make_tri(m.points.p(m.tri(f)[0]), m.points.p(m.tri(f)[1]), m.points.p(m.tri(f)[2]), h, local));
       double pending = stack.back().lower;
       while (!stack.empty()) {
@@ -92,11 +96,10 @@ void integrate_surface(const SurfaceMesh& m, const SizingField& h, ResourceEstim
         pending -= x.lower;
         double hlo = x.hc, hhi = x.hc;
         for (const double* p : x.p) {
-          const double hp = h(p);
+          const double hp = corners.at(p, [&](const double* x) { return h(x); }, local.samples);
           hlo = std::min(hlo, hp);
           hhi = std::max(hhi, hp);
         }
-        local.samples += 3;
         const double longest2 =
             std::max({dist2(x.p[0], x.p[1]), dist2(x.p[1], x.p[2]), dist2(x.p[2], x.p[0])});
         if (hhi <= 1.15 * hlo || longest2 <= 4 * hlo * hlo) {
