@@ -17,7 +17,7 @@ import tempfile
 # front door over all stages.
 MESHER_TOP = {
     "node_set": "mesher/base", "bucket_scatter": "mesher/base", "distinct_sorter": "mesher/base",
-    "worker_team": "mesher/base", "tet_quality": "mesher/base",
+    "worker_team": "mesher/base", "tet_quality": "mesher/base", "point_values": "mesher/base",
     "domain": "mesher/domain",
     "mesh_solid": "mesher/front", "resource_estimate": "mesher/front",
     "numeric_ranges": "mesher/front",
