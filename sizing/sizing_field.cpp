@@ -156,6 +156,7 @@ struct SizingField::Impl {
     }
     std::atomic_ref<std::uint8_t> st(clear.state[c]);
     std::uint8_t known = st.load(std::memory_order_acquire);
+    if (known == 1) return h_max;  // (most evaluations away from zones)
     const double scale = std::fabs(centre[0]) + std::fabs(centre[1]) + std::fabs(centre[2]) +
                          std::fabs(clear.lo[0]) + std::fabs(clear.lo[1]) + std::fabs(clear.lo[2]);
     if (known == 0) {

@@ -44,13 +44,14 @@ std::vector<std::uint32_t> label_regions(const Triangulation& tri, const NodeSet
   // own() of every tet of `wave` into `answer`: from the memo where it knows the tet, asked
   // (and listed in asked_tets) otherwise.
   if (asked_tets) asked_tets->clear();
+  const bool recall = memo && memo->size() > 0;  // (the first round's memo is empty: no lookups)
   std::vector<std::uint8_t> fresh;
   auto ask = [&](const std::vector<std::uint32_t>& wave, std::vector<std::int32_t>& answer) {
     answer.assign(wave.size(), 0);
     fresh.assign(wave.size(), 1);
     parallel_for(wave.size(), [&](std::size_t b, std::size_t e, unsigned) {
       for (std::size_t k = b; k < e; ++k) {
-        const std::int32_t m = memo ? memo->find(&tri.data[8 * std::size_t(wave[k])]) : TetMemo::kNone;
+        const std::int32_t m = recall ? memo->find(&tri.data[8 * std::size_t(wave[k])]) : TetMemo::kNone;
         fresh[k] = m == TetMemo::kNone;
         answer[k] = fresh[k] ? own(wave[k]) : m;
       }

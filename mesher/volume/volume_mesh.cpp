@@ -136,6 +136,7 @@ std::vector<std::uint8_t> classify(const Triangulation& tri, const NodeSet& node
   // Each answer is a function of the tet's nodes: those of earlier rounds come from `memo`,
   // the tets asked go to `asked` with their answers.
   asked.clear();
+  const bool recall = memo.size() > 0;  // (the first round's memo is empty: no lookups)
   auto remember = [&](const std::vector<std::uint32_t>& list, const std::vector<std::uint8_t>& fresh,
                       const auto& answer_at) {
     const std::size_t before = asked.size();
@@ -149,7 +150,7 @@ std::vector<std::uint8_t> classify(const Triangulation& tri, const NodeSet& node
     for (std::size_t k = b; k < e; ++k) {
       const std::uint32_t t = singles[k];
       const std::uint32_t* v = &tri.data[8 * std::size_t(t)];
-      if (const std::int32_t known = memo.find(v); known != TetMemo::kNone) {
+      if (const std::int32_t known = recall ? memo.find(v) : TetMemo::kNone; known != TetMemo::kNone) {
         inside[t] = std::uint8_t(known);
         continue;
       }
@@ -185,7 +186,7 @@ std::vector<std::uint8_t> classify(const Triangulation& tri, const NodeSet& node
     fresh.assign(wave.size(), 0);
     parallel_for(wave.size(), [&](std::size_t b, std::size_t e, unsigned) {
       for (std::size_t k = b; k < e; ++k) {
-        const std::int32_t known = memo.find(&tri.data[8 * std::size_t(wave[k])]);
+        const std::int32_t known = recall ? memo.find(&tri.data[8 * std::size_t(wave[k])]) : TetMemo::kNone;
         fresh[k] = known == TetMemo::kNone;
         answer[k] = fresh[k] ? side_of(wave[k]) : std::uint8_t(known);
       }
