@@ -27,6 +27,10 @@ constexpr int kMedianDepth = 48;
 constexpr int kStack = 128;
 constexpr std::uint32_t kCountBits = 5;
 constexpr std::uint32_t kCountMask = (1u << kCountBits) - 1;
+/// The prune tests' relative margin on squared distances: far above the rounding of the
+/// terms' few operations (about 1e-15 relative), so a test fails only for what cannot come
+/// below the bound as computed.
+constexpr double kSlack = 1 + 1e-9;
 
 /// The largest float <= v (round_up: the smallest float >= v). Beyond the float range this
 /// gives +-FLT_MAX or +-inf on the correct side, so the result is still a bound.
@@ -54,6 +58,11 @@ SegmentBvh::SegmentBvh(const WeightedSegments& in) {
     ids[i] = std::uint32_t(i);
     for (int k = 0; k < 3; ++k) centroid[3 * i + k] = 0.5 * (in.ab[6 * i + k] + in.ab[6 * i + 3 + k]);
   }
+  double scale = 0;
+  for (const double v : in.ab) scale = std::max(scale, std::fabs(v));
+  // Node boxes grown by far more than a distance's rounding (about 1e-16 of the lengths
+  // involved), so that a box's distance never exceeds, as computed, a segment's in it.
+  grow_ = 2e-12 * scale;
   nodes_.reserve(n / 2 + 4);
   segs_.reserve(n);
   nodes_.resize(2);  // the root, and an unused slot so that sibling pairs start at even indices
@@ -82,8 +91,8 @@ void SegmentBvh::build(std::vector<std::uint32_t>& ids, const std::vector<double
   }
   Node node;
   for (int k = 0; k < 3; ++k) {
-    node.lo[k] = round_down(lo[k]);
-    node.hi[k] = round_up(hi[k]);
+    node.lo[k] = round_down(lo[k] - grow_);
+    node.hi[k] = round_up(hi[k] + grow_);
   }
   node.wmin = round_down(wmin);
   int axis = 0;
@@ -142,54 +151,28 @@ void SegmentBvh::build(std::vector<std::uint32_t>& ids, const std::vector<double
   split_at(mid);
 }
 
-double SegmentBvh::min_value(const double* x, double g, double best, double reach) const {
-  if (nodes_.empty()) return best;
-  const double inv_g = 1 / g;
-  // Squared distance from x to a node's box, in double (the float bounds convert exactly).
-  auto box_d2 = [x](const Node& n) {
-    double d2 = 0;
-    for (int k = 0; k < 3; ++k) {
-      const double e = std::max(double(n.lo[k]) - x[k], x[k] - double(n.hi[k]));
-      d2 += e > 0 ? e * e : 0.0;
-    }
-    return d2;
-  };
-  // Could anything below a node beat best? (w_min + g·max(0, dist - reach) >= best <=>
-  // dist >= (best - w_min) / g + reach, when best > w_min.)
-  auto may_improve = [&](double wmin, double d2) {
-    const double r = (best - wmin) * inv_g;
-    return r > 0 && d2 < (r + reach) * (r + reach);
-  };
+template <class Leaf, class Keep>
+void SegmentBvh::visit(const double* x, Leaf&& leaf, Keep&& keep) const {
   // The stack holds at most one pending sibling per level plus one: depth <= kMedianDepth +
   // log2(2^27) + 1 (the count split of oversized leaves adds at most log2 too), < kStack.
   std::uint32_t stack[kStack];
   double stack_d2[kStack];
   int sp = 0;
   stack[sp] = 0;
-  stack_d2[sp++] = box_d2(nodes_[0]);
+  stack_d2[sp++] = box_d2(nodes_[0], x);
   while (sp > 0) {
     --sp;
     const Node& n = nodes_[stack[sp]];
-    if (!may_improve(n.wmin, stack_d2[sp])) continue;  // best may have dropped since the push
+    if (!keep(n.wmin, stack_d2[sp])) continue;  // the bound may have dropped since the push
     const std::uint32_t count = n.link & kCountMask, first = n.link >> kCountBits;
     if (count > 0) {
-      for (std::uint32_t i = first; i < first + count; ++i) {
-        const Seg& s = segs_[i];
-        const double xa[3] = {x[0] - s.a[0], x[1] - s.a[1], x[2] - s.a[2]};
-        double t = (xa[0] * s.d[0] + xa[1] * s.d[1] + xa[2] * s.d[2]) * s.inv_dd;
-        t = std::clamp(t, 0.0, 1.0);
-        const double r[3] = {xa[0] - t * s.d[0], xa[1] - t * s.d[1], xa[2] - t * s.d[2]};
-        const double d2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-        const double lim = (best - s.w) * inv_g;
-        if (lim > 0 && d2 < (lim + reach) * (lim + reach))
-          best = std::min(best, s.w + g * std::max(0.0, std::sqrt(d2) - reach));
-      }
+      for (std::uint32_t i = first; i < first + count; ++i) leaf(i, segs_[i]);
       continue;
     }
     const Node& l = nodes_[first];
     const Node& r = nodes_[first + 1];
-    const double dl = box_d2(l), dr = box_d2(r);
-    const bool l_ok = may_improve(l.wmin, dl), r_ok = may_improve(r.wmin, dr);
+    const double dl = box_d2(l, x), dr = box_d2(r, x);
+    const bool l_ok = keep(l.wmin, dl), r_ok = keep(r.wmin, dr);
     // Push the farther child first so that the nearer one is visited first.
     if (dl <= dr) {
       if (r_ok) { stack[sp] = first + 1; stack_d2[sp++] = dr; }
@@ -199,7 +182,78 @@ double SegmentBvh::min_value(const double* x, double g, double best, double reac
       if (r_ok) { stack[sp] = first + 1; stack_d2[sp++] = dr; }
     }
   }
+}
+
+double SegmentBvh::min_value(const double* x, double g, double best, double reach) const {
+  if (nodes_.empty()) return best;
+  const double inv_g = 1 / g;
+  // Could a term w + g·max(0, dist - reach), dist >= sqrt(d2), come below best? (<=> dist <
+  // (best - w) / g + reach, when best > w; with the margin.)
+  auto may_improve = [&](double w, double d2) {
+    const double r = (best - w) * inv_g;
+    return r > 0 && d2 <= (r + reach) * (r + reach) * kSlack;
+  };
+  visit(
+      x,
+      [&](std::uint32_t, const Seg& s) {
+        const double d2 = seg_d2(s, x);
+        if (may_improve(s.w, d2)) best = std::min(best, s.w + g * std::max(0.0, std::sqrt(d2) - reach));
+      },
+      [&](float wmin, double d2) { return may_improve(wmin, d2); });
   return best;
+}
+
+double SegmentBvh::min_of(const std::uint32_t* ids, const std::uint16_t* pos, std::size_t n,
+                          const double* x, double g, double best) const {
+  const double inv_g = 1 / g;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Seg& s = segs_[ids[pos ? pos[i] : i]];
+    const double d2 = seg_d2(s, x);
+    const double r = (best - s.w) * inv_g;
+    // (the same term as min_value's at reach 0: max(0, sqrt(d2) - 0) is sqrt(d2))
+    if (r > 0 && d2 <= r * r * kSlack) best = std::min(best, s.w + g * std::max(0.0, std::sqrt(d2)));
+  }
+  return best;
+}
+
+void SegmentBvh::collect(const double* c, double rho, double g, double cap,
+                         std::vector<std::uint32_t>& out) const {
+  if (nodes_.empty()) return;
+  const double least = min_value(c, g, HUGE_VAL);  // of w + g·d(c, s): below that plus g·rho
+  const double bound = std::min(cap, least + g * rho) * kSlack;
+  const double inv_g = 1 / g;
+  // w + g·max(0, dist - rho) <= bound <=> dist <= (bound - w) / g + rho, when bound >= w.
+  auto within = [&](double w, double d2) {
+    const double r = (bound - w) * inv_g;
+    return r >= 0 && d2 <= (r + rho) * (r + rho) * kSlack;
+  };
+  const std::size_t begin = out.size();
+  visit(
+      c,
+      [&](std::uint32_t i, const Seg& s) {
+        if (within(s.w, seg_d2(s, c))) out.push_back(i);
+      },
+      [&](float wmin, double d2) { return within(wmin, d2); });
+  std::sort(out.begin() + std::ptrdiff_t(begin), out.end());
+}
+
+void SegmentBvh::collect_from(const std::uint32_t* ids, const std::uint16_t* pos, std::size_t n,
+                              const double* c, double rho, double g, double cap,
+                              std::vector<std::uint32_t>& kept) const {
+  thread_local std::vector<double> d2;
+  d2.resize(n);
+  auto seg = [&](std::size_t k) -> const Seg& { return segs_[ids[pos ? pos[k] : k]]; };
+  double least = HUGE_VAL;
+  for (std::size_t k = 0; k < n; ++k) {
+    d2[k] = seg_d2(seg(k), c);
+    least = std::min(least, seg(k).w + g * std::sqrt(d2[k]));
+  }
+  const double bound = std::min(cap, least + g * rho) * kSlack;
+  const double inv_g = 1 / g;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double r = (bound - seg(k).w) * inv_g;
+    if (r >= 0 && d2[k] <= (r + rho) * (r + rho) * kSlack) kept.push_back(std::uint32_t(k));
+  }
 }
 
 }  // namespace kdmesh

@@ -14,6 +14,7 @@
 #include "sizing/features.h"
 #include "sizing/plane_section.h"
 #include "sizing/segment_bvh.h"
+#include "sizing/segment_cells.h"
 
 namespace kdmesh {
 namespace {
@@ -69,6 +70,13 @@ struct SizingField::Impl {
   /// h at x (reach 0), or a lower bound of h over the ball of radius reach around x: every
   /// term is size + g * distance, and a point within reach of x is at most reach closer.
   double eval(const double* x, double reach = 0, double start = HUGE_VAL) const {
+    const double best = segments.min_value(x, g, others(x, reach, start), reach);
+    return std::max(h_min, std::min(h_max, best));
+  }
+
+  /// The least of h_max, `start` and the boxes', balls' and plane sections' terms (at x, or
+  /// over the ball of radius reach): eval's value before the segments.
+  double others(const double* x, double reach, double start) const {
     double best = std::min(h_max, start);
     for (const BoxZone& b : boxes) {
       if (!(b.size < best)) continue;
@@ -98,8 +106,7 @@ struct SizingField::Impl {
       const double pv = r[0] * p.v[0] + r[1] * p.v[1] + r[2] * p.v[2];
       if (reach > 0 || p.locator.contains(pu, pv)) best = value;
     }
-    best = segments.min_value(x, g, best, reach);
-    return std::max(h_min, std::min(h_max, best));
+    return best;
   }
 
   /// Cells over the surface's box where h is h_max throughout, found on first use: a lower
@@ -109,12 +116,12 @@ struct SizingField::Impl {
   /// its edges' midpoints). One byte per cell, at most ~128^3 cells: 0 not yet known, 1 h_max
   /// throughout, 2 not, 3 not and h at its centre known. Written by whichever thread first
   /// asks (the same value by any).
-  /// In a cell that is not clear, h(centre) + g |x - centre| bounds h(x) from above (h is
-  /// g-Lipschitz), and the zones' search starts from it rather than from h_max: it prunes at
-  /// once what cannot come below it. The search's minimum is the same (the bound is above it,
-  /// with a margin far above the rounding of either). On occt_sh2.stl at 355k tets (8,375
-  /// thickness, crease and edge segments) the BVH visited 33 nodes and 26 segments a query
-  /// where it visited 37 and 32.
+  /// In a cell that is not clear, the segments' term comes from the cell's candidate lists
+  /// (SegmentCells, the same value as the BVH's search). Should their memory cap refuse the
+  /// cell, h(centre) + g |x - centre| bounds h(x) from above (h is g-Lipschitz), and the BVH's
+  /// search starts from it rather than from h_max: it prunes at once what cannot come below
+  /// it. The search's minimum is the same (the bound is above it, with a margin far above the
+  /// rounding of either).
   struct ClearCells {
     double lo[3] = {0, 0, 0}, inv = 0, radius = 0;
     int n[3] = {0, 0, 0};
@@ -122,6 +129,7 @@ struct SizingField::Impl {
     std::unique_ptr<double[]> centre_h;  // h at the centre of a cell whose state is 3
   };
   mutable ClearCells clear;
+  std::unique_ptr<SegmentCells> lists;  // over the clear cells' grid, when there are segments
 
   void init_clear_cells(const PointSet& points) {
     if (points.size() == 0 || !(h_min < h_max)) return;
@@ -142,6 +150,15 @@ struct SizingField::Impl {
     clear.radius = 0.5 * std::sqrt(3.0) * cell;
     clear.state.reset(new std::uint8_t[std::size_t(clear.n[0]) * clear.n[1] * clear.n[2]]());
     clear.centre_h.reset(new double[std::size_t(clear.n[0]) * clear.n[1] * clear.n[2]]);
+    if (segments.size() > 0 && options.list_memory > 0) {
+      // The lists' balls get value()'s margin for its largest scale (a centre's and lo's
+      // coordinates' magnitudes, the centres lying within a cell of the box).
+      double scale = 0;
+      for (int k = 0; k < 3; ++k)
+        scale += std::fabs(lo[k]) + std::max(std::fabs(lo[k]), std::fabs(hi[k]) + cell);
+      lists = std::make_unique<SegmentCells>(&segments, g, h_max, cell, clear.n, 1e-12 * scale,
+                                             options.list_memory);
+    }
   }
 
   double value(const double* x) const {
@@ -167,6 +184,10 @@ struct SizingField::Impl {
       st.store(known, std::memory_order_relaxed);
     }
     if (known == 1) return h_max;
+    if (lists) {
+      double best = others(x, 0, HUGE_VAL);
+      if (lists->min_value(c, centre, x, best)) return std::max(h_min, std::min(h_max, best));
+    }
     // (A thread that sees 3 sees the centre's value stored before it; several threads may
     // store it, all the same value.)
     std::atomic_ref<double> ch(clear.centre_h[c]);

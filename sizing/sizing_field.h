@@ -50,6 +50,10 @@ struct SizingOptions {
   /// Segments (or points, a == b) with sizes of their own that the caller derived, e.g. the
   /// mesher's wall-thickness term: each acts as a zone of its own size.
   WeightedSegments derived;
+  /// Address space for the segments' per-cell candidate lists (bytes; 0 = none), paged in as
+  /// they are made: past it, points search the segments' BVH, for the same value
+  /// (sizing/segment_cells.h).
+  std::size_t list_memory = std::size_t(256) << 20;
 };
 
 /// What the automatic (curvature) terms did, for the notices.
