@@ -27,8 +27,8 @@ namespace kdmesh {
 ///
 /// On occt_sh2.stl at diag/20 (8,375 thickness, crease and edge segments, 3.7M queries at
 /// reach 0) the BVH's search visited about 33 nodes and 26 segments a query; a list holds
-/// about 12, and the queries took 1.1 s with the lists' making against 2.1 s (one thread,
-/// replayed).
+/// about 12, and the queries took 1.0 s with the lists' making against 2.1 s (one thread,
+/// replayed; docs/performance.md, seventeenth session).
 ///
 /// Blocks and lists live in an arena of reserved address space (`max_bytes`, paged in as
 /// written), addressed by 32-bit offsets; when it is full, new blocks and lists are refused
