@@ -17,8 +17,9 @@ namespace {
 /// A finest sub-cell's list is aimed at about this many segments.
 constexpr std::size_t kTarget = 16;
 /// A cell asked fewer times than this is left to the BVH (its lists would not pay for
-/// themselves): on retinal.ply at diag/40, 64 against none took the lists' memory from 37 to
-/// 15 MB at the same speed; on turbine.ply from 47 to 31 MB, also 2-3 % faster.
+/// themselves). Measured with an earlier layout of the lists (one heap vector each), 64
+/// against none took the job's peak growth from 37 to 15 MB on retinal.ply at diag/40 at the
+/// same speed, and from 47 to 31 MB on turbine.ply at diag/40, 2 % faster.
 constexpr std::uint8_t kWarmup = 64;
 /// A cell whose own list is longer is left to the BVH: a sub-cell's list holds 16-bit
 /// positions in it.

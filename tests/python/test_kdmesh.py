@@ -143,11 +143,17 @@ def test_ctrl_c_interrupts_promptly_and_the_gil_is_released():
     t = threading.Thread(target=ticker)
     t.start()
     try:
-        kdmesh.mesh(box(), size=0.06)
+        start = time.monotonic()
+        kdmesh.mesh(box(), size=0.03)  # 0.2-0.4 s here
+        end = time.monotonic()
     finally:
         stop.set()
         t.join()
-    assert len(ticks) > 10  # the other thread ran while C++ meshed
+    # The other thread ran while C++ meshed: it ticks every 10 ms, and could not once the call
+    # held the GIL. (Counted within the call: a fixed count assumed a slower mesher.)
+    during = [x for x in ticks if start < x < end]
+    assert end - start > 0.1
+    assert len(during) >= 0.3 * (end - start) / 0.01
 
     timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
     timer.start()
