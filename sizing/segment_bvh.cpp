@@ -210,8 +210,8 @@ double SegmentBvh::min_of(const std::uint32_t* ids, const std::uint16_t* pos, st
     const Seg& s = segs_[ids[pos ? pos[i] : i]];
     const double d2 = seg_d2(s, x);
     const double r = (best - s.w) * inv_g;
-    // (the same term as min_value's at reach 0: max(0, sqrt(d2) - 0) is sqrt(d2))
-    if (r > 0 && d2 <= r * r * kSlack) best = std::min(best, s.w + g * std::max(0.0, std::sqrt(d2)));
+    // (min_value's term at reach 0: max(0, sqrt(d2) - 0) is sqrt(d2), bit for bit)
+    if (r > 0 && d2 <= r * r * kSlack) best = std::min(best, s.w + g * std::sqrt(d2));
   }
   return best;
 }

@@ -64,11 +64,6 @@ SegmentCells::~SegmentCells() {
   if (arena_) munmap(arena_, words_ * 4);
 }
 
-std::size_t SegmentCells::bytes() const {
-  return cells_ * (sizeof(std::atomic<std::uint32_t>) + 1) +
-         std::min(next_.load(std::memory_order_relaxed), words_) * 4;
-}
-
 std::uint32_t SegmentCells::take(std::size_t words) const {
   words = (words + 1) & ~std::size_t(1);  // 8-byte pieces (the blocks hold doubles)
   const std::size_t at = next_.fetch_add(words, std::memory_order_relaxed);

@@ -49,8 +49,6 @@ class SegmentCells {
   /// x lies in cell `index` (its centre `centre`): best = min(best, the segments' least term
   /// at x). False, with best untouched, when the cell has no lists (yet, or the arena is full).
   bool min_value(std::size_t index, const double* centre, const double* x, double& best) const;
-  /// The cells' tables and the arena's used part.
-  std::size_t bytes() const;
 
  private:
   struct Block;
