@@ -117,11 +117,11 @@ struct SizingField::Impl {
   /// throughout, 2 not, 3 not and h at its centre known. Written by whichever thread first
   /// asks (the same value by any).
   /// In a cell that is not clear, the segments' term comes from the cell's candidate lists
-  /// (SegmentCells, the same value as the BVH's search). Should their memory cap refuse the
-  /// cell, h(centre) + g |x - centre| bounds h(x) from above (h is g-Lipschitz), and the BVH's
-  /// search starts from it rather than from h_max: it prunes at once what cannot come below
-  /// it. The search's minimum is the same (the bound is above it, with a margin far above the
-  /// rounding of either).
+  /// (SegmentCells, the same value as the BVH's search). Where the cell has none (its first 64
+  /// queries, or their memory spent), h(centre) + g |x - centre| bounds h(x) from above (h is
+  /// g-Lipschitz), and the BVH's search starts from it rather than from h_max: it prunes at
+  /// once what cannot come below it. The search's minimum is the same (the bound is above it,
+  /// with a margin far above the rounding of either).
   struct ClearCells {
     double lo[3] = {0, 0, 0}, inv = 0, radius = 0;
     int n[3] = {0, 0, 0};
@@ -184,10 +184,8 @@ struct SizingField::Impl {
       st.store(known, std::memory_order_relaxed);
     }
     if (known == 1) return h_max;
-    if (lists) {
-      double best = others(x, 0, HUGE_VAL);
-      if (lists->min_value(c, centre, x, best)) return std::max(h_min, std::min(h_max, best));
-    }
+    double best = others(x, 0, HUGE_VAL);  // h_max and every zone's term but the segments'
+    if (lists && lists->min_value(c, centre, x, best)) return std::max(h_min, std::min(h_max, best));
     // (A thread that sees 3 sees the centre's value stored before it; several threads may
     // store it, all the same value.)
     std::atomic_ref<double> ch(clear.centre_h[c]);
@@ -201,7 +199,8 @@ struct SizingField::Impl {
     }
     const double dx = x[0] - centre[0], dy = x[1] - centre[1], dz = x[2] - centre[2];
     const double ub = (hc + g * std::sqrt(dx * dx + dy * dy + dz * dz)) * (1 + 1e-12) + 1e-12 * g * scale;
-    return eval(x, 0, ub);
+    // (eval(x, 0, ub) without the other zones again: their least is the same from any start)
+    return std::max(h_min, std::min(h_max, segments.min_value(x, g, std::min(best, ub))));
   }
 };
 
