@@ -124,37 +124,37 @@ const SegmentCells::Block* SegmentCells::block(std::size_t index, const double* 
   return b;
 }
 
-const std::uint16_t* SegmentCells::list(const Block& b, int level, const int* j) const {
+SegmentCells::Positions SegmentCells::positions(std::uint32_t offset) const {
+  return {arena_[offset], reinterpret_cast<const std::uint16_t*>(arena_ + offset + 1)};
+}
+
+SegmentCells::Positions SegmentCells::list(const Block& b, int level, const int* j) const {
   const int side = 1 << level;
   std::atomic<std::uint32_t>& slot = slots(b, level)[(std::size_t(j[2]) * side + j[1]) * side + j[0]];
-  if (const std::uint32_t at = slot.load(std::memory_order_acquire))
-    return reinterpret_cast<const std::uint16_t*>(arena_ + at);
-  if (full()) return nullptr;
+  if (const std::uint32_t at = slot.load(std::memory_order_acquire)) return positions(at);
+  if (full()) return {};
   const std::uint32_t* whole = arena_ + slots(b, 0)[0].load(std::memory_order_relaxed);
-  const std::uint16_t* parent = nullptr;  // level 1's parent is level 0's list itself
-  std::size_t n = whole[0];
+  Positions parent{whole[0], nullptr};  // level 1's parent is level 0's list itself
   if (level > 1) {
     const int up[3] = {j[0] >> 1, j[1] >> 1, j[2] >> 1};
-    const std::uint16_t* p = list(b, level - 1, up);
-    if (!p) return nullptr;
-    n = reinterpret_cast<const std::uint32_t*>(p)[0];
-    parent = p + 2;
+    parent = list(b, level - 1, up);
+    if (!parent.at) return {};
   }
   double c[3];
   for (int a = 0; a < 3; ++a) c[a] = b.corner[a] + (j[a] + 0.5) * std::ldexp(cell_, -level);
   thread_local std::vector<std::uint32_t> kept;
   kept.clear();
-  bvh_->collect_from(whole + 1, parent, n, c, radius(level), g_, cap_, kept);
+  bvh_->collect_from(whole + 1, parent.at, parent.count, c, radius(level), g_, cap_, kept);
   const std::uint32_t at = take(1 + (kept.size() + 1) / 2);
-  if (!at) return nullptr;
-  arena_[at] = std::uint32_t(kept.size());
+  if (!at) return {};
+  arena_[at] = std::uint32_t(kept.size());  // the layout positions() reads
   auto* pos = reinterpret_cast<std::uint16_t*>(arena_ + at + 1);
-  for (std::size_t k = 0; k < kept.size(); ++k) pos[k] = parent ? parent[kept[k]] : std::uint16_t(kept[k]);
+  for (std::size_t k = 0; k < kept.size(); ++k) pos[k] = parent.at ? parent.at[kept[k]] : std::uint16_t(kept[k]);
   std::uint32_t expected = 0;
   if (!slot.compare_exchange_strong(expected, at, std::memory_order_acq_rel,
                                     std::memory_order_acquire))
-    return reinterpret_cast<const std::uint16_t*>(arena_ + expected);  // another thread's, the same
-  return reinterpret_cast<const std::uint16_t*>(arena_ + at);
+    return positions(expected);  // another thread's, the same
+  return positions(at);
 }
 
 bool SegmentCells::min_value(std::size_t index, const double* centre, const double* x,
@@ -172,9 +172,9 @@ bool SegmentCells::min_value(std::size_t index, const double* centre, const doub
   int j[3];
   for (int a = 0; a < 3; ++a)  // (x is in the cell up to the caller's rounding: the radii's margin)
     j[a] = std::clamp(int(std::floor((x[a] - b->corner[a]) * inv)), 0, side - 1);
-  const std::uint16_t* l = list(*b, int(b->levels), j);
-  if (!l) return false;
-  best = bvh_->min_of(whole + 1, l + 2, reinterpret_cast<const std::uint32_t*>(l)[0], x, g_, best);
+  const Positions l = list(*b, int(b->levels), j);
+  if (!l.at) return false;
+  best = bvh_->min_of(whole + 1, l.at, l.count, x, g_, best);
   return true;
 }
 

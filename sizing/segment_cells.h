@@ -55,9 +55,17 @@ class SegmentCells {
   /// Cells are split into at most 8 x 8 x 8 sub-cells (three levels of halving).
   static constexpr int kMaxLevels = 3;
   const Block* block(std::size_t index, const double* centre) const;
-  /// The list of sub-cell j at `level` >= 1 (made, with its parents', on first use): its
-  /// count (32 bits), then 16-bit positions in level 0's list; null when the arena is full.
-  const std::uint16_t* list(const Block& b, int level, const int* j) const;
+  /// A sub-cell's list: `count` positions in level 0's list. In the arena it is one 32-bit
+  /// word (the count), then the 16-bit positions; `at` null means no list.
+  struct Positions {
+    std::uint32_t count = 0;
+    const std::uint16_t* at = nullptr;
+  };
+  /// The list stored at arena word `offset`.
+  Positions positions(std::uint32_t offset) const;
+  /// The list of sub-cell j at `level` >= 1, made (with its parents') on first use; no list
+  /// when the arena is full.
+  Positions list(const Block& b, int level, const int* j) const;
   std::atomic<std::uint32_t>* slots(const Block& b, int level) const;
   /// `words` 32-bit words of the arena (8-byte aligned): their offset, 0 when it is full.
   std::uint32_t take(std::size_t words) const;
