@@ -161,6 +161,53 @@ struct SizingField::Impl {
     }
   }
 
+  /// The magnitude of the coordinates a cell's figures are rounded at (its centre's, lo's).
+  double cell_scale(const double* centre) const {
+    return std::fabs(centre[0]) + std::fabs(centre[1]) + std::fabs(centre[2]) + std::fabs(clear.lo[0]) +
+           std::fabs(clear.lo[1]) + std::fabs(clear.lo[2]);
+  }
+  /// Cell c's state where it is not known yet: 1 (clear) or 2, stored.
+  std::uint8_t find_state(std::size_t c, const double* centre) const {
+    // The ball around the centre holds the cell (and x, whatever the rounding of its cell
+    // index: the margins are far above it).
+    const double reach = clear.radius * (1 + 1e-6) + 1e-12 * cell_scale(centre);
+    const std::uint8_t known = eval(centre, reach) < h_max ? 2 : 1;
+    std::atomic_ref<std::uint8_t>(clear.state[c]).store(known, std::memory_order_relaxed);
+    return known;
+  }
+
+  /// True when the cells that the box around the ball (x, r) meets, at most four per axis (the
+  /// estimate's balls span up to 4 h), are all clear. Every zone's term is then at least h_max over each cell's ball (by the clear
+  /// test's margin of 1e-6 of the radius, far above the rounding of a term), and the balls hold
+  /// the ball (x, r): they reach 0.37 of a cell past their cells' faces, far beyond the
+  /// rounding of a cell index. So eval(x, r) is h_max exactly, without the search.
+  bool ball_clear(const double* x, double r) const {
+    if (!clear.state) return false;
+    std::size_t first[3];
+    int span[3];
+    for (int k = 0; k < 3; ++k) {
+      const double a = std::floor((x[k] - r - clear.lo[k]) * clear.inv);
+      const double b = std::floor((x[k] + r - clear.lo[k]) * clear.inv);
+      if (!(a >= 0 && b < clear.n[k] && b - a <= 3)) return false;  // off the box, large, or NaN
+      first[k] = std::size_t(a);
+      span[k] = int(b - a);
+    }
+    for (int i = 0; i <= span[2]; ++i)
+      for (int j = 0; j <= span[1]; ++j)
+        for (int l = 0; l <= span[0]; ++l) {
+          const std::size_t f[3] = {first[0] + std::size_t(l), first[1] + std::size_t(j), first[2] + std::size_t(i)};
+          const std::size_t c = (f[2] * std::size_t(clear.n[1]) + f[1]) * std::size_t(clear.n[0]) + f[0];
+          std::uint8_t known = std::atomic_ref<std::uint8_t>(clear.state[c]).load(std::memory_order_acquire);
+          if (known == 0) {
+            double centre[3];
+            for (int k = 0; k < 3; ++k) centre[k] = clear.lo[k] + (double(f[k]) + 0.5) / clear.inv;
+            known = find_state(c, centre);
+          }
+          if (known != 1) return false;
+        }
+    return true;
+  }
+
   double value(const double* x) const {
     if (!clear.state) return eval(x);
     std::size_t c = 0;
@@ -174,15 +221,8 @@ struct SizingField::Impl {
     std::atomic_ref<std::uint8_t> st(clear.state[c]);
     std::uint8_t known = st.load(std::memory_order_acquire);
     if (known == 1) return h_max;  // (most evaluations away from zones)
-    const double scale = std::fabs(centre[0]) + std::fabs(centre[1]) + std::fabs(centre[2]) +
-                         std::fabs(clear.lo[0]) + std::fabs(clear.lo[1]) + std::fabs(clear.lo[2]);
-    if (known == 0) {
-      // The ball around the centre holds the cell (and x, whatever the rounding of its cell
-      // index: the margins are far above it).
-      const double reach = clear.radius * (1 + 1e-6) + 1e-12 * scale;
-      known = eval(centre, reach) < h_max ? 2 : 1;
-      st.store(known, std::memory_order_relaxed);
-    }
+    const double scale = cell_scale(centre);
+    if (known == 0) known = find_state(c, centre);
     if (known == 1) return h_max;
     double best = others(x, 0, HUGE_VAL);  // h_max and every zone's term but the segments'
     if (lists && lists->min_value(c, centre, x, best)) return std::max(h_min, std::min(h_max, best));
@@ -216,15 +256,20 @@ double SizingField::operator()(const double* x) const {
 }
 double SizingField::lower_bound(const double* x, double radius) const {
   if (!impl_) empty_field();
+  // At radius 0, h(x) by the zones' own search, without the cells' tables and lists: the
+  // value operator() finds through them, bit for bit (the tests compare the two). Otherwise
+  // h(x) as operator() finds it, at a fraction of the search's cost.
   if (!(radius > 0)) return impl_->eval(x);
-  // Both are lower bounds: the terms with shortened distances, and h(x) - g r (h is
-  // g-Lipschitz). The first is the tighter far from zones, the second beside a plane zone,
-  // whose in-region term the first takes wherever the plane is in reach.
-  return std::max(impl_->eval(x, radius), impl_->eval(x) - impl_->g * radius);
+  return lower_bound(x, radius, impl_->value(x));
 }
 double SizingField::lower_bound(const double* x, double radius, double h_at_x) const {
   if (!impl_) empty_field();
   if (!(radius > 0)) return h_at_x;
+  // Away from every zone: eval(x, radius) is h_max (ball_clear), found from the cells' table.
+  if (impl_->ball_clear(x, radius)) return std::max(impl_->h_max, h_at_x - impl_->g * radius);
+  // Both are lower bounds: the terms with shortened distances, and h(x) - g r (h is
+  // g-Lipschitz). The first is the tighter far from zones, the second beside a plane zone,
+  // whose in-region term the first takes wherever the plane is in reach.
   return std::max(impl_->eval(x, radius), h_at_x - impl_->g * radius);
 }
 double SizingField::max_size() const {

@@ -73,7 +73,9 @@ class SizingField {
   /// A lower bound of h over the ball of the given radius around x, never above h anywhere
   /// in it: the larger of h(x) - g radius (h is g-Lipschitz) and the field with every zone's
   /// distance shortened by the radius (attained for a lone point zone; h_max far from every
-  /// zone, where h(x) - g radius may be below h_min). Equals h(x) at radius 0.
+  /// zone, where h(x) - g radius may be below h_min). Equals h(x) at radius 0, there found by
+  /// the zones' own search alone (without operator()'s cell tables and lists, whose value is
+  /// the same bit for bit: the tests' reference).
   double lower_bound(const double* x, double radius) const;
   /// lower_bound(x, radius) from h(x) the caller already has (`h_at_x`, exactly what
   /// operator() returned at x): one zone query fewer.

@@ -782,6 +782,34 @@ TEST(SizingField, ClearCellsGiveExactlyTheZonesValue) {
   EXPECT_GT(far, 100000);
 }
 
+// A lower bound over a ball that meets only clear cells (h = h_max throughout their balls) is
+// h_max without the zones' search. It must be the search's value bit for bit: here against a
+// field of the same zones without the cells' tables (built over no surface points), at balls
+// of radii up to 1.6 cells (cells of 0.1), so that they meet one to four cells per axis, around
+// a point zone and a segment zone (a ball judged by its own cell alone gives h_max where a
+// neighbour is refined, and fails this).
+TEST(SizingField, LowerBoundOverBallsInClearCellsEqualsTheZonesSearch) {
+  SurfaceMesh box;
+  box.points.push_back(0, 0, 0);
+  box.points.push_back(10, 10, 10);
+  const SizingOptions o =
+      opts(0.1, 0.3, {zone(Kind::point, 0.02, {5, 5, 5}), zone(Kind::segment, 0.05, {3, 3, 3, 3.5, 4, 3})});
+  const SizingField h = build_sizing_field(box, o), ref = build_sizing_field(SurfaceMesh{}, o);
+  std::mt19937_64 rng(29);
+  std::uniform_real_distribution<double> u(2.6, 5.6), radius(0.0, 0.16);
+  int at_max = 0, below = 0;
+  for (int i = 0; i < 200000; ++i) {
+    const double x[3] = {u(rng), u(rng), u(rng)};
+    const double r = radius(rng);
+    const double want = ref.lower_bound(x, r);
+    ASSERT_EQ(h.lower_bound(x, r), want) << "at " << x[0] << " " << x[1] << " " << x[2] << " r " << r;
+    ASSERT_EQ(h.lower_bound(x, r, h(x)), want);
+    (want == 0.1 ? at_max : below) += 1;
+  }
+  EXPECT_GT(at_max, 100000);
+  EXPECT_GT(below, 1000);
+}
+
 // Where a cell is not clear, h(x) takes the segments' term from the cell's candidate lists, or,
 // without them (list_memory 0, or past a cap that refuses most cells), starts the BVH's search
 // from h at the cell's centre plus g times the distance to it (h is g-Lipschitz), which prunes

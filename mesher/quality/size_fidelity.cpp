@@ -84,8 +84,9 @@ SizeFidelity measure_size_fidelity(const PointSet& points, const std::vector<std
     for (std::size_t v = b; v < e; ++v) {
       const double* x = points.p(std::uint32_t(v));
       const double margin = 1e-6 * reach[v] + 1e-12 * (std::fabs(x[0]) + std::fabs(x[1]) + std::fabs(x[2]));
-      clear[v] = !(sizing.lower_bound(x, reach[v] + margin) < far);
-      unrefined[v] = clear[v] || !(sizing(x) < far);
+      const double hx = sizing(x);
+      clear[v] = !(sizing.lower_bound(x, reach[v] + margin, hx) < far);
+      unrefined[v] = clear[v] || !(hx < far);
     }
   }, 1024);
   // Fixed blocks of edges, summed in order: the same figures on any number of threads.
