@@ -4,11 +4,14 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <string>
 
 #include "core/error.h"
 #include "mesher/delaunay/canonical_order.h"
 #include "mesher/delaunay/delaunay.h"
+#include "mesher/delaunay/predicates.h"
 #include "mesher/reference/delaunay_check.h"
 #include "mesher/order/order.h"
 #include "mesher/reference/tet_compare.h"
@@ -194,6 +197,83 @@ TEST(CanonicalOrder, RecordsAreTheSameOnAnyThreadCountAndStillValid) {
     EXPECT_TRUE(other.tri.data == first.tri.data) << what << ", built in brio order";
     EXPECT_EQ(other.stats.duplicates, first.stats.duplicates) << what << ", built in brio order";
     EXPECT_EQ(other.stats.duplicate_of, first.stats.duplicate_of) << what << ", built in brio order";
+  }
+}
+
+// The canonical form as canonical_order.h states it, checked record by record rather than
+// against an earlier run: each tet's least-ranked vertex first and the least of the other
+// three second, by an even permutation (the finite tets stay positive); the tets in order of
+// their last inserted vertex's rank, then of the other three's, largest first; face references that name each other
+// across the same three vertices; no tet naming a repeat the stats list. On random points, a
+// lattice (ties everywhere) and repeats, built on two threads.
+TEST(CanonicalOrder, RecordsFollowTheDocumentedForm) {
+  std::vector<std::pair<std::string, PointSet>> cases;
+  cases.emplace_back("cube", generate_points(Distribution::cube, kN, 21));
+  PointSet lattice;
+  for (int i = 0; i < 30; ++i)
+    for (int j = 0; j < 30; ++j)
+      for (int k = 0; k < 30; ++k) lattice.push_back(i, j, k);
+  cases.emplace_back("lattice 30^3", lattice);
+  PointSet repeats = generate_points(Distribution::cube, kN, 22);
+  for (std::uint32_t i = 0; i < 2000; ++i) {
+    const std::uint32_t src = (i * 7919u) % std::uint32_t(kN);
+    repeats.push_back(repeats.p(src)[0], repeats.p(src)[1], repeats.p(src)[2]);
+  }
+  cases.emplace_back("cube with 2000 repeats", repeats);
+  for (const auto& [what, pts] : cases) {
+    const Ordering order = make_order(pts, {OrderKind::kd_bfs_hilbert, 1, 0.125});
+    DelaunayOptions o;
+    o.threads = 2;
+    DelaunayResult r = delaunay(pts, order, o);
+    const std::vector<std::uint32_t> before = canonical_tets(pts, r.tri);
+    canonicalize_triangulation(r.tri, order, r.stats, 2);
+    EXPECT_TRUE(compare_tets(pts, before, canonical_tets(pts, r.tri)).same_set()) << what;
+    std::vector<std::uint32_t> rank(pts.size());
+    for (std::size_t k = 0; k < order.size(); ++k) rank[order.order[k]] = std::uint32_t(k);
+    auto rank_of = [&](std::uint32_t v) { return v == kInfiniteVertex ? std::uint32_t(pts.size()) : rank[v]; };
+    std::vector<std::uint8_t> repeat(pts.size(), 0);
+    for (const std::uint32_t d : r.stats.duplicates) repeat[d] = 1;
+    std::array<std::uint32_t, 4> previous{};
+    const std::size_t nt = r.tri.num_tets();
+    ASSERT_GT(nt, 0u);
+    for (std::size_t t = 0; t < nt; ++t) {
+      std::array<std::uint32_t, 4> rk;
+      for (int i = 0; i < 4; ++i) {
+        const std::uint32_t v = r.tri.v(t, i);
+        ASSERT_TRUE(v == kInfiniteVertex || !repeat[v]) << what << ": tet " << t << " names a repeat";
+        rk[std::size_t(i)] = rank_of(v);
+      }
+      ASSERT_LT(rk[0], std::min({rk[1], rk[2], rk[3]})) << what << ": tet " << t;
+      ASSERT_LT(rk[1], std::min(rk[2], rk[3])) << what << ": tet " << t;
+      if (r.tri.v(t, 0) != kInfiniteVertex && r.tri.v(t, 1) != kInfiniteVertex &&
+          r.tri.v(t, 2) != kInfiniteVertex && r.tri.v(t, 3) != kInfiniteVertex) {
+        ASSERT_GT(pred::orient3d(pts.p(r.tri.v(t, 0)), pts.p(r.tri.v(t, 1)), pts.p(r.tri.v(t, 2)),
+                                 pts.p(r.tri.v(t, 3))), 0) << what << ": tet " << t;
+      }
+      std::array<std::uint32_t, 4> key = rk;
+      std::sort(key.begin(), key.end(), std::greater<>());
+      if (t > 0) {  // the last inserted vertex's rank up, then the other three's down
+        const bool follows = key[0] > previous[0] ||
+                             (key[0] == previous[0] && std::array<std::uint32_t, 3>{key[1], key[2], key[3]} <
+                                                           std::array<std::uint32_t, 3>{previous[1], previous[2], previous[3]});
+        ASSERT_TRUE(follows) << what << ": tets " << t - 1 << ", " << t;
+      }
+      previous = key;
+      for (int i = 0; i < 4; ++i) {
+        const std::uint32_t a = r.tri.adj(t, i), u = a >> 2;
+        const int j = int(a & 3);
+        ASSERT_LT(u, nt) << what;
+        ASSERT_EQ(r.tri.adj(u, j), 4 * std::uint32_t(t) + std::uint32_t(i)) << what << ": tet " << t;
+        std::array<std::uint32_t, 3> mine{}, theirs{};
+        for (int k = 0, m = 0, w = 0; k < 4; ++k) {
+          if (k != i) mine[std::size_t(m++)] = r.tri.v(t, k);
+          if (k != j) theirs[std::size_t(w++)] = r.tri.v(u, k);
+        }
+        std::sort(mine.begin(), mine.end());
+        std::sort(theirs.begin(), theirs.end());
+        ASSERT_EQ(mine, theirs) << what << ": tet " << t << " face " << i;
+      }
+    }
   }
 }
 

@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "mesher/bucket_scatter.h"
 #include "core/parallel_for.h"
+#include "core/uninit_allocator.h"
 
 namespace kdmesh {
 
@@ -29,6 +30,15 @@ constexpr std::array<std::array<std::uint8_t, 4>, 12> inverse_table() {
   return inv;
 }
 constexpr auto kInverse = inverse_table();
+
+/// kFirstTwo[i][j] (i != j): the even permutation that puts old vertex i first and j second
+/// (each such pair begins exactly one of the twelve).
+constexpr std::array<std::array<std::uint8_t, 4>, 4> first_two_table() {
+  std::array<std::array<std::uint8_t, 4>, 4> t{};
+  for (int p = 0; p < 12; ++p) t[kEven[p][0]][kEven[p][1]] = std::uint8_t(p);
+  return t;
+}
+constexpr auto kFirstTwo = first_two_table();
 
 /// Of each set of equal points the stats name, every tet names the one of least rank.
 void keep_first_duplicates(Triangulation& tri, const std::vector<std::uint32_t>& rank,
@@ -80,49 +90,61 @@ void canonicalize_triangulation(Triangulation& tri, const Ordering& order, Delau
   if (!stats.duplicates.empty()) keep_first_duplicates(tri, rank, stats, threads);
   const std::uint32_t inf_rank = std::uint32_t(n);
   auto rank_of = [&](std::uint32_t v) { return v == kInfiniteVertex ? inf_rank : rank[v]; };
-  // Each tet's rotation, and its last inserted vertex's rank (its bucket).
+  // Each tet's rotation, and its last inserted vertex's rank (its bucket). A tet's ranks are
+  // distinct (the infinite vertex's is n), so the rotation is the even permutation that puts
+  // the least first and the least of the other three second (kFirstTwo).
   std::vector<std::uint8_t> perm(nt);
   std::vector<std::uint32_t> slot(nt);  // the bucket, then the tet's new id
-  std::vector<std::array<std::uint32_t, 3>> rest(nt);  // the other three ranks, largest first
+  std::vector<std::array<std::uint32_t, 3>, UninitAllocator<std::array<std::uint32_t, 3>>> rest(nt);  // the other three ranks, largest first
   parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t t = b; t < e; ++t) {
-      const std::uint32_t r[4] = {rank_of(tri.v(t, 0)), rank_of(tri.v(t, 1)), rank_of(tri.v(t, 2)),
-                                  rank_of(tri.v(t, 3))};
-      int best = 0;
-      for (int p = 1; p < 12; ++p) {
-        const std::uint8_t* P = kEven[p];
-        const std::uint8_t* B = kEven[best];
-        if (r[P[0]] < r[B[0]] || (r[P[0]] == r[B[0]] && r[P[1]] < r[B[1]])) best = p;
-      }
-      perm[t] = std::uint8_t(best);
-      std::array<std::uint32_t, 4> d{r[0], r[1], r[2], r[3]};
-      std::sort(d.begin(), d.end(), std::greater<>());
-      slot[t] = d[0];
-      rest[t] = {d[1], d[2], d[3]};
+      std::uint32_t r[4] = {rank_of(tri.v(t, 0)), rank_of(tri.v(t, 1)), rank_of(tri.v(t, 2)), rank_of(tri.v(t, 3))};
+      int i0 = 0;
+      for (int k = 1; k < 4; ++k)
+        if (r[k] < r[i0]) i0 = k;
+      int j0 = i0 == 0 ? 1 : 0;
+      for (int k = j0 + 1; k < 4; ++k)
+        if (k != i0 && r[k] < r[j0]) j0 = k;
+      perm[t] = kFirstTwo[std::size_t(i0)][std::size_t(j0)];
+      // Largest first: a sorting network of four.
+      auto order2 = [](std::uint32_t& x, std::uint32_t& y) {
+        if (x < y) std::swap(x, y);
+      };
+      order2(r[0], r[1]), order2(r[2], r[3]), order2(r[0], r[2]), order2(r[1], r[3]), order2(r[1], r[2]);
+      slot[t] = r[0];
+      rest[t] = {r[1], r[2], r[3]};
     }
   }, 1 << 14, threads);
 
-  // Counting sort by the last vertex (ranks 0..n, n = infinite), stable, then each bucket by
-  // the other three ranks, largest first (distinct tets differ in some rank).
-  std::vector<std::uint32_t> sorted(nt);
+  // Counting sort by the last vertex (ranks 0..n, n = infinite), stable, each tet's record
+  // taking its other three ranks along; then each bucket by those, largest first (distinct
+  // tets differ in some rank), in place, and each tet's new id.
+  struct Rec {
+    std::array<std::uint32_t, 3> rest;
+    std::uint32_t tet;
+  };
+  std::vector<Rec, UninitAllocator<Rec>> recs(nt);  // written by the scatter
   const std::vector<std::size_t> start = bucket_scatter(
       nt, n + 1, [&](std::size_t t) { return slot[t]; },
-      [&](std::size_t t, std::size_t at) { sorted[at] = std::uint32_t(t); });
+      [&](std::size_t t, std::size_t at) { recs[at] = {rest[t], std::uint32_t(t)}; });
+  decltype(rest)().swap(rest);
   parallel_for(n + 1, [&](std::size_t b, std::size_t e, unsigned) {
-    std::vector<std::pair<std::array<std::uint32_t, 3>, std::uint32_t>> bucket;
+    auto before = [](const Rec& x, const Rec& y) { return x.rest > y.rest; };
     for (std::size_t r = b; r < e; ++r) {
-      if (start[r + 1] - start[r] < 2) continue;
-      bucket.clear();
-      for (std::size_t k = start[r]; k < start[r + 1]; ++k) bucket.emplace_back(rest[sorted[k]], sorted[k]);
-      std::sort(bucket.begin(), bucket.end(), [](const auto& a, const auto& c) { return a.first > c.first; });
-      for (std::size_t k = start[r]; k < start[r + 1]; ++k) sorted[k] = bucket[k - start[r]].second;
+      Rec* first = recs.data() + start[r];
+      Rec* last = recs.data() + start[r + 1];
+      if (last - first > 16) {
+        std::sort(first, last, before);
+      } else {
+        for (Rec* x = first + 1; x < last; ++x)  // a few tets: insertion
+          for (Rec* y = x; y > first && before(*y, y[-1]); --y) std::swap(*y, y[-1]);
+      }
+      for (Rec* x = first; x < last; ++x) slot[x->tet] = std::uint32_t(x - recs.data());
     }
   }, 1 << 12, threads);
-  parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t k = b; k < e; ++k) slot[sorted[k]] = std::uint32_t(k);
-  }, 1 << 14, threads);
 
-  // The records in their new order, turned, with their face references renamed.
+  // The records in their new order, turned, with their face references renamed. Each tet's
+  // record is requested 16 ahead, its neighbours' new ids and rotations 8 ahead.
   TetRecords out;
   // The same capacity as the kernel's records (untouched, it costs no memory): a later
   // delaunay_insert then adds its tets without copying the records.
@@ -130,7 +152,14 @@ void canonicalize_triangulation(Triangulation& tri, const Ordering& order, Delau
   out.resize(tri.data.size());
   parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t k = b; k < e; ++k) {
-      const std::size_t t = sorted[k];
+      if (k + 16 < e) __builtin_prefetch(&tri.data[8 * std::size_t(recs[k + 16].tet) + 4]);
+      if (k + 8 < e)
+        for (int i = 0; i < 4; ++i) {
+          const std::uint32_t u = tri.adj(recs[k + 8].tet, i) >> 2;
+          __builtin_prefetch(&slot[u]);
+          __builtin_prefetch(&perm[u]);
+        }
+      const std::size_t t = recs[k].tet;
       const std::uint8_t* P = kEven[perm[t]];
       std::uint32_t* o = &out[8 * k];
       for (int i = 0; i < 4; ++i) {

@@ -16,9 +16,10 @@ namespace kdmesh {
 ///  - each tet's vertices are turned by an even permutation (orientation kept) so that the
 ///    vertex of least rank comes first and, of the other three, the least of the three
 ///    rotations second;
-///  - tets are sorted by their vertex ranks in decreasing order (the tet's last inserted vertex
-///    first): tets made around one insertion stay together, as the kernel's own order keeps
-///    them, and the infinite tets come last;
+///  - tets are sorted by the rank of their last inserted vertex, lowest first, and tets of one
+///    last vertex by their other three ranks taken largest first, in decreasing order: tets made
+///    around one insertion stay together, as the kernel's own order keeps them, and the
+///    infinite tets come last;
 ///  - exact duplicate points (stats.duplicates): every tet names, of each set of equal points,
 ///    the one of least rank, the one a sequential run keeps; `stats` then says so too.
 /// Face references are remapped accordingly. Runs on up to `threads` threads (0 = all cores);
