@@ -116,30 +116,43 @@ void canonicalize_triangulation(Triangulation& tri, const Ordering& order, Delau
     }
   }, 1 << 14, threads);
 
-  // Counting sort by the last vertex (ranks 0..n, n = infinite), stable, each tet's record
-  // taking its other three ranks along; then each bucket by those, largest first (distinct
-  // tets differ in some rank), in place, and each tet's new id.
+  // Counting sort by the last vertex (ranks 0..n, n = infinite), stable, then each bucket by
+  // the other three ranks, largest first (distinct tets differ in some rank), and each tet's
+  // new id. The buckets are taken in order, so the other ranks of the tets 16 places ahead
+  // are requested while a bucket is sorted (carrying them through the scatter in 16-byte
+  // records instead took 12 bytes a tet more at the peak, for the same time).
+  std::vector<std::uint32_t> sorted(nt);
+  const std::vector<std::size_t> start = bucket_scatter(
+      nt, n + 1, [&](std::size_t t) { return slot[t]; },
+      [&](std::size_t t, std::size_t at) { sorted[at] = std::uint32_t(t); });
   struct Rec {
     std::array<std::uint32_t, 3> rest;
     std::uint32_t tet;
   };
-  std::vector<Rec, UninitAllocator<Rec>> recs(nt);  // written by the scatter
-  const std::vector<std::size_t> start = bucket_scatter(
-      nt, n + 1, [&](std::size_t t) { return slot[t]; },
-      [&](std::size_t t, std::size_t at) { recs[at] = {rest[t], std::uint32_t(t)}; });
-  decltype(rest)().swap(rest);
   parallel_for(n + 1, [&](std::size_t b, std::size_t e, unsigned) {
+    std::vector<Rec> bucket;
+    const std::size_t end = start[e];
     auto before = [](const Rec& x, const Rec& y) { return x.rest > y.rest; };
     for (std::size_t r = b; r < e; ++r) {
-      Rec* first = recs.data() + start[r];
-      Rec* last = recs.data() + start[r + 1];
-      if (last - first > 16) {
-        std::sort(first, last, before);
-      } else {
-        for (Rec* x = first + 1; x < last; ++x)  // a few tets: insertion
-          for (Rec* y = x; y > first && before(*y, y[-1]); --y) std::swap(*y, y[-1]);
+      const std::size_t k0 = start[r], k1 = start[r + 1];
+      bucket.clear();
+      for (std::size_t k = k0; k < k1; ++k) {
+        if (k + 16 < end) {
+          __builtin_prefetch(&rest[sorted[k + 16]]);
+          __builtin_prefetch(&slot[sorted[k + 16]], 1);
+        }
+        bucket.push_back({rest[sorted[k]], sorted[k]});
       }
-      for (Rec* x = first; x < last; ++x) slot[x->tet] = std::uint32_t(x - recs.data());
+      if (bucket.size() > 16) {
+        std::sort(bucket.begin(), bucket.end(), before);
+      } else {
+        for (std::size_t x = 1; x < bucket.size(); ++x)  // a few tets: insertion
+          for (std::size_t y = x; y > 0 && before(bucket[y], bucket[y - 1]); --y) std::swap(bucket[y], bucket[y - 1]);
+      }
+      for (std::size_t i = 0; i < bucket.size(); ++i) {
+        sorted[k0 + i] = bucket[i].tet;
+        slot[bucket[i].tet] = std::uint32_t(k0 + i);
+      }
     }
   }, 1 << 12, threads);
 
@@ -152,14 +165,14 @@ void canonicalize_triangulation(Triangulation& tri, const Ordering& order, Delau
   out.resize(tri.data.size());
   parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t k = b; k < e; ++k) {
-      if (k + 16 < e) __builtin_prefetch(&tri.data[8 * std::size_t(recs[k + 16].tet) + 4]);
+      if (k + 16 < e) __builtin_prefetch(&tri.data[8 * std::size_t(sorted[k + 16]) + 4]);
       if (k + 8 < e)
         for (int i = 0; i < 4; ++i) {
-          const std::uint32_t u = tri.adj(recs[k + 8].tet, i) >> 2;
+          const std::uint32_t u = tri.adj(sorted[k + 8], i) >> 2;
           __builtin_prefetch(&slot[u]);
           __builtin_prefetch(&perm[u]);
         }
-      const std::size_t t = recs[k].tet;
+      const std::size_t t = sorted[k];
       const std::uint8_t* P = kEven[perm[t]];
       std::uint32_t* o = &out[8 * k];
       for (int i = 0; i < 4; ++i) {
