@@ -699,76 +699,26 @@ void compact_result(const Triangulation& tri, const std::vector<std::uint8_t>& i
                     bool interfaces, VolumeMesh& out) {
   VolumeMeshStats& st = out.stats;
   const std::size_t nt = tri.num_tets();
-  // The inside tets keep their order: counted per block, then numbered, on all cores.
-  constexpr std::size_t kBlock = std::size_t(1) << 16;
-  const std::size_t blocks = (nt + kBlock - 1) / kBlock;
-  std::vector<std::uint32_t> block_first(blocks + 1, 0);
-  parallel_for(blocks, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t k = b; k < e; ++k) {
-      std::uint32_t c = 0;
-      for (std::size_t t = k * kBlock; t < std::min(nt, (k + 1) * kBlock); ++t) c += inside[t] != 0;
-      block_first[k + 1] = c;
-    }
-  }, 1);
-  for (std::size_t k = 0; k < blocks; ++k) block_first[k + 1] += block_first[k];
-  const std::uint32_t count = block_first[blocks];
+  std::vector<std::uint32_t> new_tet(nt, kNone);
+  std::uint32_t count = 0;
+  for (std::size_t t = 0; t < nt; ++t)
+    if (inside[t]) new_tet[t] = count++;
   if (count == 0)
     throw GeometryError("mesh_volume: no tetrahedron of the " + std::to_string(nodes.size_count()) +
                         " nodes lies inside the solid");
-  std::vector<std::uint32_t> new_tet(nt);
-  parallel_for(blocks, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t k = b; k < e; ++k) {
-      std::uint32_t next = block_first[k];
-      for (std::size_t t = k * kBlock; t < std::min(nt, (k + 1) * kBlock); ++t) new_tet[t] = inside[t] ? next++ : kNone;
+  std::vector<std::uint32_t> new_id(nodes.size_count(), kNone);
+  std::uint32_t nn = 0;
+  out.tets.reserve(4 * std::size_t(count));
+  out.tet_region.reserve(count);
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (!inside[t]) continue;
+    for (int i = 0; i < 4; ++i) {
+      const std::uint32_t v = tri.v(t, i);
+      if (new_id[v] == kNone) new_id[v] = nn++;
+      out.tets.push_back(new_id[v]);
     }
-  }, 1);
-  // Nodes are numbered in the order they first appear in the inside tets (tet by tet, vertex by
-  // vertex), as one pass would number them. Each node's first place, 4 new_tet + i, is a
-  // minimum (the same whatever the thread count); its new id is the number of first places
-  // before it, counted on a bitmap of the places.
-  const std::size_t n_nodes = nodes.size_count();
-  std::vector<std::uint32_t> first(n_nodes, kNone);
-  parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t t = b; t < e; ++t) {
-      if (new_tet[t] == kNone) continue;
-      for (int i = 0; i < 4; ++i) {
-        const std::uint32_t place = 4 * new_tet[t] + std::uint32_t(i);  // count < 2^30 tets
-        std::atomic_ref<std::uint32_t> f(first[tri.v(t, i)]);
-        std::uint32_t now = f.load(std::memory_order_relaxed);
-        while (place < now && !f.compare_exchange_weak(now, place, std::memory_order_relaxed)) {
-        }
-      }
-    }
-  }, 1 << 16);
-  const std::size_t places = 4 * std::size_t(count);
-  std::vector<std::uint64_t> bits((places + 63) / 64, 0);
-  parallel_for(n_nodes, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t v = b; v < e; ++v)
-      if (first[v] != kNone)
-        std::atomic_ref<std::uint64_t>(bits[first[v] >> 6]).fetch_or(std::uint64_t(1) << (first[v] & 63),
-                                                                       std::memory_order_relaxed);
-  }, 1 << 16);
-  std::vector<std::uint32_t> word_rank(bits.size() + 1, 0);
-  for (std::size_t w = 0; w < bits.size(); ++w) word_rank[w + 1] = word_rank[w] + std::uint32_t(std::popcount(bits[w]));
-  const std::uint32_t nn = word_rank[bits.size()];
-  std::vector<std::uint32_t> new_id(n_nodes, kNone);
-  parallel_for(n_nodes, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t v = b; v < e; ++v) {
-      const std::uint32_t f = first[v];
-      if (f != kNone)
-        new_id[v] = word_rank[f >> 6] + std::uint32_t(std::popcount(bits[f >> 6] & ((std::uint64_t(1) << (f & 63)) - 1)));
-    }
-  }, 1 << 16);
-  out.tets.resize(places);
-  out.tet_region.resize(count);
-  parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t t = b; t < e; ++t) {
-      const std::uint32_t k = new_tet[t];
-      if (k == kNone) continue;
-      for (int i = 0; i < 4; ++i) out.tets[4 * std::size_t(k) + i] = new_id[tri.v(t, i)];
-      out.tet_region[k] = region_of.empty() ? 0 : region_of[t];
-    }
-  }, 1 << 16);
+    out.tet_region.push_back(region_of.empty() ? 0 : region_of[t]);
+  }
   out.tet_adj.resize(4 * std::size_t(count));
   parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t t = b; t < e; ++t) {
@@ -784,32 +734,27 @@ void compact_result(const Triangulation& tri, const std::vector<std::uint8_t>& i
   out.nodes.kind.resize(nn);
   out.nodes.facet.resize(nn);
   out.nodes.size.resize(nn);
-  parallel_for(n_nodes, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t i = b; i < e; ++i) {
-      const std::uint32_t j = new_id[i];
-      if (j == kNone) continue;
-      std::copy_n(nodes.points.p(std::uint32_t(i)), 3, &out.nodes.points.xyz[3 * std::size_t(j)]);
-      out.nodes.kind[j] = nodes.kind[i];
-      out.nodes.facet[j] = nodes.facet[i];
-      out.nodes.size[j] = nodes.size[i];
-    }
-  }, 1 << 16);
+  for (std::size_t i = 0; i < nodes.size_count(); ++i) {
+    const std::uint32_t j = new_id[i];
+    if (j == kNone) continue;
+    std::copy_n(nodes.points.p(std::uint32_t(i)), 3, &out.nodes.points.xyz[3 * std::size_t(j)]);
+    out.nodes.kind[j] = nodes.kind[i];
+    out.nodes.facet[j] = nodes.facet[i];
+    out.nodes.size[j] = nodes.size[i];
+  }
   out.boundary.resize(bf.verts.size());
   for (std::size_t k = 0; k < bf.verts.size(); ++k) out.boundary[k] = new_id[bf.verts[k]];
   std::vector<char> on_boundary(nn, 0);
   for (std::uint32_t v : out.boundary) on_boundary[v] = 1;
   if (interfaces)  // nodes on the faces between bodies are on an interface
-    parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
-      for (std::size_t t = b; t < e; ++t) {
-        if (!inside[t]) continue;
-        for (int i = 0; i < 4; ++i) {
-          const std::uint32_t u = tri.adj(t, i) >> 2;
-          if (!inside[u] || region_of[u] == region_of[t]) continue;
-          for (int j = 0; j < 3; ++j)
-            std::atomic_ref<char>(on_boundary[new_id[tri.v(t, kTetFace[i][j])]]).store(1, std::memory_order_relaxed);
-        }
+    for (std::size_t t = 0; t < nt; ++t) {
+      if (!inside[t]) continue;
+      for (int i = 0; i < 4; ++i) {
+        const std::uint32_t u = tri.adj(t, i) >> 2;
+        if (!inside[u] || region_of[u] == region_of[t]) continue;
+        for (int j = 0; j < 3; ++j) on_boundary[new_id[tri.v(t, kTetFace[i][j])]] = 1;
       }
-    }, 1 << 16);
+    }
   for (std::uint32_t v = 0; v < nn; ++v)
     if (!on_boundary[v] && out.nodes.kind[v] != NodeKind::interior) {
       out.nodes.kind[v] = NodeKind::interior;
