@@ -148,13 +148,9 @@ TEST(ParallelDelaunay, AbsurdThreadCountIsAUsageError) {
 namespace kdmesh {
 namespace {
 
-// The pipeline meshes from canonical records (mesher/delaunay/canonical_order.h), so that its
-// tie-breaks by tet id, and so the mesh, do not depend on the thread count. On 1, 2 and 3
-// threads, for random points, the axes, an integer lattice (ties everywhere) and points with
-// exact repeats (which copy a run keeps depends on who inserts it): the same records, the
-// same duplicate lists, still a valid Delaunay triangulation with the same tets; and the
-// same again from a triangulation built inserting another order.
-TEST(CanonicalOrder, RecordsAreTheSameOnAnyThreadCountAndStillValid) {
+/// The canonical order's cases: random points, the axes, an integer lattice (ties everywhere)
+/// and random points with 3,000 exact repeats.
+std::vector<std::pair<std::string, PointSet>> canonical_cases() {
   std::vector<std::pair<std::string, PointSet>> cases;
   cases.emplace_back("cube", generate_points(Distribution::cube, kN, 11));
   cases.emplace_back("axes", generate_points(Distribution::axes, kN, 12));
@@ -169,7 +165,17 @@ TEST(CanonicalOrder, RecordsAreTheSameOnAnyThreadCountAndStillValid) {
     repeats.push_back(repeats.p(src)[0], repeats.p(src)[1], repeats.p(src)[2]);
   }
   cases.emplace_back("cube with 3000 repeats", repeats);
-  for (const auto& [what, pts] : cases) {
+  return cases;
+}
+
+// The pipeline meshes from canonical records (mesher/delaunay/canonical_order.h), so that its
+// tie-breaks by tet id, and so the mesh, do not depend on the thread count. On 1, 2 and 3
+// threads, for random points, the axes, an integer lattice (ties everywhere) and points with
+// exact repeats (which copy a run keeps depends on who inserts it): the same records, the
+// same duplicate lists, still a valid Delaunay triangulation with the same tets; and the
+// same again from a triangulation built inserting another order.
+TEST(CanonicalOrder, RecordsAreTheSameOnAnyThreadCountAndStillValid) {
+  for (const auto& [what, pts] : canonical_cases()) {
     const Ordering order = make_order(pts, {OrderKind::kd_bfs_hilbert, 1, 0.125});
     DelaunayResult first;
     for (const unsigned threads : {1u, 2u, 3u}) {
@@ -203,24 +209,11 @@ TEST(CanonicalOrder, RecordsAreTheSameOnAnyThreadCountAndStillValid) {
 // The canonical form as canonical_order.h states it, checked record by record rather than
 // against an earlier run: each tet's least-ranked vertex first and the least of the other
 // three second, by an even permutation (the finite tets stay positive); the tets in order of
-// their last inserted vertex's rank, then of the other three's, largest first; face references that name each other
-// across the same three vertices; no tet naming a repeat the stats list. On random points, a
-// lattice (ties everywhere) and repeats, built on two threads.
+// their last inserted vertex's rank, then of the other three's, largest first; face
+// references that name each other across the same three vertices; no tet naming a repeat the
+// stats list. On canonical_cases(), built on two threads.
 TEST(CanonicalOrder, RecordsFollowTheDocumentedForm) {
-  std::vector<std::pair<std::string, PointSet>> cases;
-  cases.emplace_back("cube", generate_points(Distribution::cube, kN, 21));
-  PointSet lattice;
-  for (int i = 0; i < 30; ++i)
-    for (int j = 0; j < 30; ++j)
-      for (int k = 0; k < 30; ++k) lattice.push_back(i, j, k);
-  cases.emplace_back("lattice 30^3", lattice);
-  PointSet repeats = generate_points(Distribution::cube, kN, 22);
-  for (std::uint32_t i = 0; i < 2000; ++i) {
-    const std::uint32_t src = (i * 7919u) % std::uint32_t(kN);
-    repeats.push_back(repeats.p(src)[0], repeats.p(src)[1], repeats.p(src)[2]);
-  }
-  cases.emplace_back("cube with 2000 repeats", repeats);
-  for (const auto& [what, pts] : cases) {
+  for (const auto& [what, pts] : canonical_cases()) {
     const Ordering order = make_order(pts, {OrderKind::kd_bfs_hilbert, 1, 0.125});
     DelaunayOptions o;
     o.threads = 2;
