@@ -149,7 +149,8 @@ SegmentCells::Positions SegmentCells::list(const Block& b, int level, const int*
   if (!at) return {};
   arena_[at] = std::uint32_t(kept.size());  // the layout positions() reads
   auto* pos = reinterpret_cast<std::uint16_t*>(arena_ + at + 1);
-  for (std::size_t k = 0; k < kept.size(); ++k) pos[k] = parent.at ? parent.at[kept[k]] : std::uint16_t(kept[k]);
+  for (std::size_t k = 0; k < kept.size(); ++k)
+    pos[k] = parent.at ? parent.at[kept[k]] : std::uint16_t(kept[k]);
   std::uint32_t expected = 0;
   if (!slot.compare_exchange_strong(expected, at, std::memory_order_acq_rel,
                                     std::memory_order_acquire))

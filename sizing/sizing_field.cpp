@@ -161,6 +161,9 @@ struct SizingField::Impl {
     }
   }
 
+  /// The centre's coordinate on axis k of the cells of index f there. Every caller computes it
+  /// here: a cell's state is found from its centre, so all must get the same bits.
+  double centre_at(int k, double f) const { return clear.lo[k] + (f + 0.5) / clear.inv; }
   /// The magnitude of the coordinates a cell's figures are rounded at (its centre's, lo's).
   double cell_scale(const double* centre) const {
     return std::fabs(centre[0]) + std::fabs(centre[1]) + std::fabs(centre[2]) + std::fabs(clear.lo[0]) +
@@ -177,10 +180,11 @@ struct SizingField::Impl {
   }
 
   /// True when the cells that the box around the ball (x, r) meets, at most four per axis (the
-  /// estimate's balls span up to 4 h), are all clear. Every zone's term is then at least h_max over each cell's ball (by the clear
-  /// test's margin of 1e-6 of the radius, far above the rounding of a term), and the balls hold
-  /// the ball (x, r): they reach 0.37 of a cell past their cells' faces, far beyond the
-  /// rounding of a cell index. So eval(x, r) is h_max exactly, without the search.
+  /// estimate's balls span up to 4 h), are all clear. Every zone's term is then at least h_max
+  /// over each cell's ball (by the clear test's margin of 1e-6 of the radius, far above the
+  /// rounding of a term), and the balls hold the ball (x, r): they reach 0.37 of a cell past
+  /// their cells' faces, far beyond the rounding of a cell index. So eval(x, r) is h_max
+  /// exactly, without the search.
   bool ball_clear(const double* x, double r) const {
     if (!clear.state) return false;
     std::size_t first[3];
@@ -195,12 +199,13 @@ struct SizingField::Impl {
     for (int i = 0; i <= span[2]; ++i)
       for (int j = 0; j <= span[1]; ++j)
         for (int l = 0; l <= span[0]; ++l) {
-          const std::size_t f[3] = {first[0] + std::size_t(l), first[1] + std::size_t(j), first[2] + std::size_t(i)};
+          const std::size_t f[3] = {first[0] + std::size_t(l), first[1] + std::size_t(j),
+                                    first[2] + std::size_t(i)};
           const std::size_t c = (f[2] * std::size_t(clear.n[1]) + f[1]) * std::size_t(clear.n[0]) + f[0];
           std::uint8_t known = std::atomic_ref<std::uint8_t>(clear.state[c]).load(std::memory_order_acquire);
           if (known == 0) {
             double centre[3];
-            for (int k = 0; k < 3; ++k) centre[k] = clear.lo[k] + (double(f[k]) + 0.5) / clear.inv;
+            for (int k = 0; k < 3; ++k) centre[k] = centre_at(k, double(f[k]));
             known = find_state(c, centre);
           }
           if (known != 1) return false;
@@ -216,7 +221,7 @@ struct SizingField::Impl {
       const double f = std::floor((x[k] - clear.lo[k]) * clear.inv);
       if (!(f >= 0 && f < clear.n[k])) return eval(x);  // off the box (or NaN)
       c = c * std::size_t(clear.n[k]) + std::size_t(f);
-      centre[k] = clear.lo[k] + (f + 0.5) / clear.inv;
+      centre[k] = centre_at(k, f);
     }
     std::atomic_ref<std::uint8_t> st(clear.state[c]);
     std::uint8_t known = st.load(std::memory_order_acquire);

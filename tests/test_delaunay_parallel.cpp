@@ -223,7 +223,9 @@ TEST(CanonicalOrder, RecordsFollowTheDocumentedForm) {
     EXPECT_TRUE(compare_tets(pts, before, canonical_tets(pts, r.tri)).same_set()) << what;
     std::vector<std::uint32_t> rank(pts.size());
     for (std::size_t k = 0; k < order.size(); ++k) rank[order.order[k]] = std::uint32_t(k);
-    auto rank_of = [&](std::uint32_t v) { return v == kInfiniteVertex ? std::uint32_t(pts.size()) : rank[v]; };
+    auto rank_of = [&](std::uint32_t v) {
+      return v == kInfiniteVertex ? std::uint32_t(pts.size()) : rank[v];
+    };
     std::vector<std::uint8_t> repeat(pts.size(), 0);
     for (const std::uint32_t d : r.stats.duplicates) repeat[d] = 1;
     std::array<std::uint32_t, 4> previous{};
@@ -246,9 +248,9 @@ TEST(CanonicalOrder, RecordsFollowTheDocumentedForm) {
       std::array<std::uint32_t, 4> key = rk;
       std::sort(key.begin(), key.end(), std::greater<>());
       if (t > 0) {  // the last inserted vertex's rank up, then the other three's down
-        const bool follows = key[0] > previous[0] ||
-                             (key[0] == previous[0] && std::array<std::uint32_t, 3>{key[1], key[2], key[3]} <
-                                                           std::array<std::uint32_t, 3>{previous[1], previous[2], previous[3]});
+        const std::array<std::uint32_t, 3> rest{key[1], key[2], key[3]};
+        const std::array<std::uint32_t, 3> rest_before{previous[1], previous[2], previous[3]};
+        const bool follows = key[0] > previous[0] || (key[0] == previous[0] && rest < rest_before);
         ASSERT_TRUE(follows) << what << ": tets " << t - 1 << ", " << t;
       }
       previous = key;

@@ -95,10 +95,12 @@ void canonicalize_triangulation(Triangulation& tri, const Ordering& order, Delau
   // the least first and the least of the other three second (kFirstTwo).
   std::vector<std::uint8_t> perm(nt);
   std::vector<std::uint32_t> slot(nt);  // the bucket, then the tet's new id
-  std::vector<std::array<std::uint32_t, 3>, UninitAllocator<std::array<std::uint32_t, 3>>> rest(nt);  // the other three ranks, largest first
+  // The other three ranks, largest first.
+  std::vector<std::array<std::uint32_t, 3>, UninitAllocator<std::array<std::uint32_t, 3>>> rest(nt);
   parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t t = b; t < e; ++t) {
-      std::uint32_t r[4] = {rank_of(tri.v(t, 0)), rank_of(tri.v(t, 1)), rank_of(tri.v(t, 2)), rank_of(tri.v(t, 3))};
+      std::uint32_t r[4] = {rank_of(tri.v(t, 0)), rank_of(tri.v(t, 1)), rank_of(tri.v(t, 2)),
+                            rank_of(tri.v(t, 3))};
       int i0 = 0;
       for (int k = 1; k < 4; ++k)
         if (r[k] < r[i0]) i0 = k;
@@ -147,7 +149,8 @@ void canonicalize_triangulation(Triangulation& tri, const Ordering& order, Delau
         std::sort(bucket.begin(), bucket.end(), before);
       } else {
         for (std::size_t x = 1; x < bucket.size(); ++x)  // a few tets: insertion
-          for (std::size_t y = x; y > 0 && before(bucket[y], bucket[y - 1]); --y) std::swap(bucket[y], bucket[y - 1]);
+          for (std::size_t y = x; y > 0 && before(bucket[y], bucket[y - 1]); --y)
+            std::swap(bucket[y], bucket[y - 1]);
       }
       for (std::size_t i = 0; i < bucket.size(); ++i) {
         sorted[k0 + i] = bucket[i].tet;
