@@ -223,9 +223,8 @@ TEST(CanonicalOrder, RecordsFollowTheDocumentedForm) {
     EXPECT_TRUE(compare_tets(pts, before, canonical_tets(pts, r.tri)).same_set()) << what;
     std::vector<std::uint32_t> rank(pts.size());
     for (std::size_t k = 0; k < order.size(); ++k) rank[order.order[k]] = std::uint32_t(k);
-    auto rank_of = [&](std::uint32_t v) {
-      return v == kInfiniteVertex ? std::uint32_t(pts.size()) : rank[v];
-    };
+    const std::uint32_t infinite_rank = std::uint32_t(pts.size());  // (a binding: not captured)
+    auto rank_of = [&](std::uint32_t v) { return v == kInfiniteVertex ? infinite_rank : rank[v]; };
     std::vector<std::uint8_t> repeat(pts.size(), 0);
     for (const std::uint32_t d : r.stats.duplicates) repeat[d] = 1;
     std::array<std::uint32_t, 4> previous{};
