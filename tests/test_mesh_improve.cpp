@@ -13,8 +13,10 @@
 #include <set>
 #include <string>
 
+#include "core/error.h"
 #include "core/rng.h"
 #include "io/surface_io.h"
+#include "mesher/improve/flip_parts.h"
 #include "mesher/improve/flip_pass.h"
 #include "mesher/improve/improve_boundary.h"
 #include "mesher/improve/improve_flips.h"
@@ -1119,7 +1121,9 @@ TEST(FlipPass, BatchesOnSeveralThreadsMakeTheOneThreadFlips) {
       m.inside_query = p.query.get();
       m.certify_inside();
       SineCache cache(m, threads);
-      const std::size_t ops = flip_pass(m, cache, deg_to_sine(30), 10, counts, &boundary, threads);
+      FlipSchedule whole_queue;  // the batches on the one queue, without a parallel phase
+      whole_queue.max_levels = 0;
+      const std::size_t ops = flip_pass(m, cache, deg_to_sine(30), 10, counts, &boundary, threads, whole_queue);
       EXPECT_EQ(ops, counts.edge_removals + counts.face_removals + counts.boundary_flips);
       // The cache is current: the new tets' sines, computed with the choices, are refresh's.
       EXPECT_EQ(cache.q(), SineCache(m, 1).q()) << threads << " threads";
@@ -1148,6 +1152,88 @@ TEST(FlipPass, BatchesOnSeveralThreadsMakeTheOneThreadFlips) {
   EXPECT_GT(all.chosen_again, 0u);
   EXPECT_GT(all.reused, 0u);
   EXPECT_GT(all.requeued, 0u);
+}
+
+// The flip stage's parallel phase works parts of the mesh apart, on different threads; a
+// part's flips read and change only tets whose four vertices are deep in it. The result must
+// not depend on the thread count, the mesh must pass the mesh check, and both phases must have
+// worked: on the gear graded towards a section (boundary flips included) and a graded cube,
+// split into 8 or 16 parts.
+TEST(FlipPass, PartsWorkedOnAnyThreadCountMakeTheSameValidMesh) {
+  FlipSchedule parts;
+  parts.part_tets = 64;
+  parts.max_levels = 4;
+  for (const double h : {0.0, 0.06}) {
+    const Piped p = h > 0 ? pipeline({{0, 0, 0, 1, 1, 1}}, h, 0.2) : gear_towards_a_section();
+    const FeatureEdges features = detect_sharp_edges(p.surface.mesh, 30);
+    BoundaryContext boundary;
+    boundary.surface = &p.surface;
+    boundary.query = p.query.get();
+    boundary.sizing = &p.sizing;
+    boundary.features = &features;
+    auto run = [&](unsigned threads, FlipCounts& counts) {
+      VolumeMesh vm = p.mesh;
+      ImproveTets m(vm.nodes, vm.tets, vm.tet_region);
+      m.inside_query = p.query.get();
+      m.certify_inside();
+      SineCache cache(m, threads);
+      const double threshold = deg_to_sine(30);
+      EXPECT_GE(parts.levels(cache.below(threshold).size()), 3u) << "h " << h;
+      const std::size_t ops = flip_pass(m, cache, threshold, 10, counts, &boundary, threads, parts);
+      EXPECT_EQ(ops, counts.edge_removals + counts.face_removals + counts.boundary_flips);
+      EXPECT_EQ(cache.q(), SineCache(m, 1).q()) << threads << " threads";
+      expect_consistent(m);
+      m.write_back(vm);
+      return vm;
+    };
+    FlipCounts one;
+    const VolumeMesh ref = run(1, one);
+    EXPECT_GT(one.in_parts, 100u) << "h " << h;
+    EXPECT_GT(one.left_by_parts, 0u) << "h " << h;
+    EXPECT_GT(one.edge_removals + one.face_removals + one.boundary_flips, one.in_parts) << "h " << h;
+    const MeshCheck c = check_volume_mesh(ref, {p.surface, *p.query, p.sizing});
+    EXPECT_TRUE(c.ok()) << "h " << h << ": " << failures(c);
+    for (const unsigned threads : {2u, 3u}) {
+      FlipCounts n;
+      const VolumeMesh vm = run(threads, n);
+      EXPECT_EQ(vm.tets, ref.tets) << "h " << h << ", " << threads << " threads";
+      EXPECT_EQ(vm.boundary, ref.boundary) << "h " << h << ", " << threads << " threads";
+      EXPECT_EQ(n.in_parts, one.in_parts);
+      EXPECT_EQ(n.left_by_parts, one.left_by_parts);
+    }
+  }
+}
+
+// A deep vertex's whole star lies in its part: the deep vertices of any tet share one part
+// (a tet with vertices deep in two parts would let two threads change it at once), every part
+// has some, the vertices near the cuts have none, and the split is the same on any thread count.
+TEST(FlipParts, TheDeepVerticesOfATetShareTheirPart) {
+  const Piped p = pipeline({{0, 0, 0, 1, 1, 1}}, 0.08, 0.5);
+  VolumeMesh vm = p.mesh;
+  ImproveTets m(vm.nodes, vm.tets, vm.tet_region);
+  std::vector<std::uint32_t> seeds;  // every live tet
+  for (std::uint32_t t = 0; t < m.capacity(); ++t)
+    if (m.alive(t)) seeds.push_back(t);
+  const FlipParts parts = flip_parts(m, seeds, 3, 1);
+  ASSERT_EQ(parts.count, 8u);
+  EXPECT_EQ(flip_parts(m, seeds, 3, 2).deep, parts.deep);
+  std::vector<std::size_t> deep_in(parts.count + 1, 0);
+  for (const std::uint8_t d : parts.deep) ++deep_in[d == kNoPart ? parts.count : d];
+  for (unsigned q = 0; q < parts.count; ++q) EXPECT_GT(deep_in[q], 0u) << "part " << q;
+  EXPECT_GT(deep_in[parts.count], 0u);
+  std::vector<std::size_t> held(parts.count, 0);  // tets a part may flip
+  for (const std::uint32_t t : seeds) {
+    std::uint8_t part = kNoPart;
+    for (int i = 0; i < 4; ++i) {
+      const std::uint8_t d = parts.deep[m.v(t)[i]];
+      if (d == kNoPart) continue;
+      EXPECT_TRUE(part == kNoPart || part == d) << "tet " << t;
+      part = d;
+    }
+    if (part != kNoPart && parts.holds(part, m.v(t))) ++held[part];
+  }
+  for (unsigned q = 0; q < parts.count; ++q) EXPECT_GT(held[q], 0u) << "part " << q;
+  EXPECT_THROW(flip_parts(m, seeds, 8, 1), UsageError);
 }
 
 // Three rounds left handle.ply at diag/20 with 111 tets below the targets (min dihedral 5.1

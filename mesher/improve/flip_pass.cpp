@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "mesher/improve/flip_parts.h"
 #include "mesher/improve/improve_flips.h"
 #include "mesher/improve/improve_quality.h"
 #include "mesher/worker_team.h"
@@ -40,18 +41,23 @@ struct FlipChoice {
   std::vector<double> fresh_q;
   std::uint32_t star_read[6] = {};
   int stars = 0;
+  /// The choice needed a star its StarAccess does not allow (left to the stage's serial phase).
+  bool deferred = false;
 };
 
 /// The best of tet t's edge removals, face removals and (given `boundary`) boundary edge
 /// removals that improve the mesh; `cand` is scratch space. Reads only tets that hold a vertex
-/// of t or of out.star_read (positions do not change during the flip stage).
+/// of t or of out.star_read (positions do not change during the flip stage); out.star_read
+/// only where `access` allows (else out.deferred).
 void choose(const ImproveTets& m, std::uint32_t t, const double* sines, int max_ring,
-            const BoundaryContext* boundary, FlipCandidate& cand, FlipChoice& out) {
+            const BoundaryContext* boundary, FlipCandidate& cand, FlipChoice& out,
+            const StarAccess& access = {}) {
   FlipCandidate& best = out.best;
   best.q_new = -1;
   best.q_old = 0;
   out.have = out.is_edge = out.is_boundary = false;
   out.in_region = true;
+  out.deferred = false;
   out.stars = 0;
   m.prefetch_around(t);
   const std::uint32_t* v = m.v(t);
@@ -80,8 +86,12 @@ void choose(const ImproveTets& m, std::uint32_t t, const double* sines, int max_
     for (const auto& e : kTetEdge) {
       std::uint32_t star = kImproveNone;
       const bool found = boundary_edge_removal(m, t, v[e[0]], v[e[1]], max_ring, *boundary, cand,
-                                               out.have ? best.q_new : -1, sines, &star);
+                                               out.have ? best.q_new : -1, sines, &star, access);
       if (star != kImproveNone) out.star_read[out.stars++] = star;
+      if (star != kImproveNone && !access.ok(star)) {
+        out.deferred = true;
+        return;
+      }
       if (found && cand.improves() && (!out.have || cand.q_new > best.q_new)) {
         std::swap(best, cand);
         out.have = out.is_boundary = true;
@@ -138,10 +148,118 @@ class FlipQueue {
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap_;
 };
 
+/// Makes choice c (c.have, its tet still as chosen): replaces the cavity (new slots from
+/// `pool` when given), counts it, sets the old and new slots' sines and calls push(entry) for
+/// each new tet below `threshold`. False if replace refuses (the faces do not match).
+template <class Push>
+bool make(ImproveTets& m, SineCache& cache, FlipChoice& c, double threshold, FlipCounts& counts,
+          std::vector<std::uint32_t>& created, std::vector<std::uint32_t>* pool, Push&& push) {
+  if (!c.in_region || !m.replace(c.best.old, c.best.fresh, &created, c.is_boundary, true, pool))
+    return false;
+  ++(c.is_boundary ? counts.boundary_flips : c.is_edge ? counts.edge_removals : counts.face_removals);
+  // (A freed slot the new tets did not take is dead; the new tets' sines are the choice's.)
+  for (std::uint32_t o : c.best.old)
+    if (!m.alive(o)) cache.set(o, std::numeric_limits<double>::infinity());
+  for (std::size_t j = 0; j < created.size(); ++j) {
+    const std::uint32_t n = created[j];
+    if (!c.is_boundary) m.mark_inside(n);  // flip_valid passed inside_ok on every one
+    const double qn = c.fresh_q[j];
+    cache.set(n, qn);
+    if (qn < threshold) push(Entry(qn, n, m.version(n)));
+  }
+  return true;
+}
+
+/// One part of the parallel phase: its tets' entries, the entries it leaves to the serial
+/// phase, its dead slots and its counts.
+struct Part {
+  std::vector<Entry> first, left;
+  std::vector<std::uint32_t> pool;
+  FlipCounts counts;
+  std::size_t ops = 0;
+};
+
+/// Works part p's queue, worst first, one tet at a time, as the serial phase would on the
+/// part alone: a tet not held by the part (parts.holds), or whose choice needs a star outside
+/// it, or whose flip needs more slots than the part's pool has, is left to the serial phase.
+/// Every tet it reads or changes has its four vertices in the part, so the parts run at once.
+void work_part(ImproveTets& m, SineCache& cache, const FlipParts& parts, std::uint8_t p, Part& part,
+               double threshold, int max_ring, const BoundaryContext* boundary) {
+  FlipQueue queue(std::move(part.first), nullptr);
+  const StarAccess access{parts.deep.data(), p};
+  const double* sines = cache.q().data();  // (grown: set() does not move it)
+  FlipCandidate cand;
+  FlipChoice c;
+  std::vector<std::uint32_t> created;
+  while (!queue.empty()) {
+    const Entry e = queue.top();
+    queue.pop();
+    if (const std::uint32_t a = queue.first_ahead(kAhead); a != kImproveNone) m.prefetch_tet(a);
+    const std::uint32_t t = std::get<1>(e);
+    if (!m.alive(t) || m.version(t) != std::get<2>(e)) continue;
+    if (!parts.holds(p, m.v(t))) {
+      part.left.push_back(e);
+      continue;
+    }
+    choose(m, t, sines, max_ring, boundary, cand, c, access);
+    if (c.deferred || (c.have && part.pool.size() + c.best.old.size() < c.best.fresh.size() / 4)) {
+      part.left.push_back(e);
+      continue;
+    }
+    if (c.have && make(m, cache, c, threshold, part.counts, created, &part.pool,
+                       [&](const Entry& n) { queue.push(n); }))
+      ++part.ops;
+  }
+}
+
+/// The parallel phase: the tets `below` split into parts (flip_parts), each part worked apart
+/// (work_part), the parts shared out over the team's threads. Appends the entries left to the
+/// serial phase to `rest`; returns the flips made. The result depends only on the mesh and
+/// the schedule: the parts change disjoint sets of tets, each from its own dead slots.
+std::size_t work_parts(ImproveTets& m, SineCache& cache, const std::vector<std::uint32_t>& below,
+                       double threshold, int max_ring, const BoundaryContext* boundary,
+                       const FlipSchedule& schedule, WorkerTeam* team, FlipCounts& counts,
+                       std::vector<Entry>& rest) {
+  const FlipParts parts = flip_parts(m, below, schedule.levels(below.size()), team ? team->size() : 1);
+  std::vector<Part> part(parts.count);
+  for (const std::uint32_t t : below) {
+    const std::uint8_t p = parts.deep[m.v(t)[0]];
+    (p != kNoPart && parts.holds(p, m.v(t)) ? part[p].first : rest)
+        .emplace_back(cache.q()[t], t, m.version(t));
+  }
+  for (Part& pt : part)
+    pt.pool = m.take_slots(std::max<std::size_t>(schedule.min_pool, pt.first.size() / schedule.pool_per));
+  cache.grow();
+  std::vector<std::uint32_t> order(parts.count);  // largest first, for the threads' balance
+  for (std::uint32_t p = 0; p < parts.count; ++p) order[p] = p;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return part[a].first.size() > part[b].first.size(); });
+  std::atomic<std::size_t> next{0};
+  auto work = [&](unsigned) {
+    for (std::size_t k; (k = next.fetch_add(1)) < order.size();)
+      work_part(m, cache, parts, std::uint8_t(order[k]), part[order[k]], threshold, max_ring, boundary);
+  };
+  if (team) team->run(work);
+  else work(0);
+  std::size_t ops = 0;
+  for (Part& pt : part) {  // in part order
+    m.give_slots(pt.pool);
+    rest.insert(rest.end(), pt.left.begin(), pt.left.end());
+    counts.edge_removals += pt.counts.edge_removals;
+    counts.face_removals += pt.counts.face_removals;
+    counts.boundary_flips += pt.counts.boundary_flips;
+    counts.in_parts += pt.ops;
+    ops += pt.ops;
+  }
+  counts.left_by_parts += rest.size();
+  return ops;
+}
+
 }  // namespace
 
 std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring,
-                      FlipCounts& counts, const BoundaryContext* boundary, unsigned threads) {
+                      FlipCounts& counts, const BoundaryContext* boundary, unsigned threads,
+                      const FlipSchedule& schedule) {
   const unsigned asked = threads ? threads : std::max(1u, std::thread::hardware_concurrency());
   // A batch is about half a millisecond of work (64 choices of ~9 us on the gear box's
   // housing), near the cost of starting a thread: the threads are started once, not per batch.
@@ -149,8 +267,13 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
   if (asked > 1) team = std::make_unique<WorkerTeam>(asked);
   const std::vector<std::uint32_t> below = cache.below(threshold);
   std::vector<Entry> first;
-  first.reserve(below.size());
-  for (std::uint32_t t : below) first.emplace_back(cache.q()[t], t, m.version(t));
+  std::size_t ops = 0;
+  if (schedule.levels(below.size()) > 0) {
+    ops = work_parts(m, cache, below, threshold, max_ring, boundary, schedule, team.get(), counts, first);
+  } else {
+    first.reserve(below.size());
+    for (std::uint32_t t : below) first.emplace_back(cache.q()[t], t, m.version(t));
+  }
   FlipQueue heap(std::move(first), team.get());
   const unsigned workers = team ? team->size() : 1;
   const std::size_t batch_max = workers > 1 ? kBatch : 1;
@@ -165,7 +288,6 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
   // Per vertex: the last batch in which a tet holding it was replaced (batches count from 1).
   std::vector<std::uint32_t> touched(m.nodes().size_count(), 0);
   std::uint32_t stamp = 0;
-  std::size_t ops = 0;
   std::vector<std::uint32_t> created;
   while (!heap.empty()) {
     batch.clear();
@@ -233,20 +355,8 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
       if (!c.have) continue;
       for (std::uint32_t o : c.best.old)
         for (int i = 0; i < 4; ++i) touched[m.v(o)[i]] = stamp;
-      if (!c.in_region || !m.replace(c.best.old, c.best.fresh, &created, c.is_boundary, true))
-        continue;
-      ++ops;
-      ++(c.is_boundary ? counts.boundary_flips : c.is_edge ? counts.edge_removals : counts.face_removals);
-      // (A freed slot the new tets did not take is dead; the new tets' sines are the choice's.)
-      for (std::uint32_t o : c.best.old)
-        if (!m.alive(o)) cache.set(o, std::numeric_limits<double>::infinity());
-      for (std::size_t j = 0; j < created.size(); ++j) {
-        const std::uint32_t n = created[j];
-        if (!c.is_boundary) m.mark_inside(n);  // flip_valid passed inside_ok on every one
-        const double qn = c.fresh_q[j];
-        cache.set(n, qn);
-        if (qn < threshold) heap.push(Entry(qn, n, m.version(n)));
-      }
+      if (make(m, cache, c, threshold, counts, created, nullptr, [&](const Entry& n) { heap.push(n); }))
+        ++ops;
     }
   }
   return ops;

@@ -119,7 +119,8 @@ bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::u
 
 bool boundary_edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::uint32_t b,
                            int max_ring, const BoundaryContext& ctx, FlipCandidate& out,
-                           double floor, const double* sines, std::uint32_t* star_read) {
+                           double floor, const double* sines, std::uint32_t* star_read,
+                           const StarAccess& access) {
   static thread_local std::vector<std::uint32_t> ring, star;
   out.old.clear();
   out.fresh.clear();
@@ -135,6 +136,7 @@ bool boundary_edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t 
   // The new boundary edge (r_0, r_m) must not be an edge already.
   const std::uint32_t r0 = ring.front(), rm = ring.back();
   if (star_read) *star_read = r0;
+  if (!access.ok(r0)) return false;
   m.star(r0, star);
   for (std::uint32_t s : star)
     if (index_in(m.v(s), rm) >= 0) return false;

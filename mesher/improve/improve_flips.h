@@ -20,6 +20,14 @@ struct FlipCandidate {
   bool improves() const { return q_new > q_old; }
 };
 
+/// The vertices whose stars an evaluation may read: all, or (the flip stage's parallel phase,
+/// where other threads change the rest of the mesh) those with part_of[v] == part.
+struct StarAccess {
+  const std::uint8_t* part_of = nullptr;
+  std::uint8_t part = 0;
+  bool ok(std::uint32_t v) const { return !part_of || part_of[v] == part; }
+};
+
 /// Edge removal (Shewchuk 2003): the interior edge (a, b) of tet t, its ring r_0..r_{m-1}
 /// (3 <= m <= max_ring) triangulated to maximise the smallest tet_sine of the tets
 /// (r_i r_k r_j a) and (r_i r_j r_k b) (dynamic programme over sub-polygons). False if the edge
@@ -41,11 +49,12 @@ bool edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::u
 /// no), (r_0, r_m) is not an edge yet, and both new faces lie on the surface within the
 /// context's tolerance (face_on_surface). Validated (flip_valid); the caller replaces with
 /// boundary_may_change. `floor` and `sines` as for edge_removal. If it reads the star of a
-/// vertex other than a and b (the ring end r_0), that vertex goes to *star_read.
+/// vertex other than a and b (the ring end r_0), that vertex goes to *star_read; false,
+/// without reading it, if `access` does not allow it (a and b's stars are the caller's).
 bool boundary_edge_removal(const ImproveTets& m, std::uint32_t t, std::uint32_t a, std::uint32_t b,
                            int max_ring, const BoundaryContext& ctx, FlipCandidate& out,
                            double floor = -1, const double* sines = nullptr,
-                           std::uint32_t* star_read = nullptr);
+                           std::uint32_t* star_read = nullptr, const StarAccess& access = {});
 
 /// Face removal: face i of tet t (opposite p) shared with tet u (opposite q) replaced by the
 /// three tets around the new edge pq (a 2-3 flip). False on a boundary face or if pq does not

@@ -63,14 +63,13 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
   ta_.resize(4 * nt);
   region_.resize(nt);
   version_.resize(nt);
-  mark_.resize(nt);
   inside_known_.resize(nt);
   const bool given = adjacency && adjacency->size() == 4 * nt;
   parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t s = b; s < e; ++s) {
       std::copy_n(&tets[4 * std::size_t(order[s])], 4, &tv_[4 * s]);
       region_[s] = order[s] < region.size() ? region[order[s]] : 0;
-      version_[s] = mark_[s] = 0;
+      version_[s] = 0;
       inside_known_[s] = 0;
       if (!given) std::fill_n(&ta_[4 * s], 4, kImproveNone);
     }
@@ -159,10 +158,10 @@ void ImproveTets::lock_interfaces(std::size_t np) {
     }
 }
 
-std::uint32_t ImproveTets::new_slot() {
-  if (!free_.empty()) {
-    const std::uint32_t t = free_.back();
-    free_.pop_back();
+std::uint32_t ImproveTets::new_slot(std::vector<std::uint32_t>& from) {
+  if (!from.empty()) {
+    const std::uint32_t t = from.back();
+    from.pop_back();
     inside_known_[t] = 0;
     return t;
   }
@@ -171,9 +170,27 @@ std::uint32_t ImproveTets::new_slot() {
   ta_.insert(ta_.end(), 4, kImproveNone);
   region_.push_back(0);
   version_.push_back(0);
-  mark_.push_back(0);
   inside_known_.push_back(0);
   return t;
+}
+
+std::vector<std::uint32_t> ImproveTets::take_slots(std::size_t n) {
+  if (free_.size() < n) {
+    const std::size_t grow = n - free_.size(), at = tv_.size() / 4;
+    tv_.resize(tv_.size() + 4 * grow, kImproveNone);
+    ta_.resize(ta_.size() + 4 * grow, kImproveNone);
+    region_.resize(region_.size() + grow, 0);
+    version_.resize(version_.size() + grow, 0);
+    inside_known_.resize(inside_known_.size() + grow, 0);
+    for (std::size_t k = grow; k-- > 0;) free_.push_back(std::uint32_t(at + k));
+  }
+  std::vector<std::uint32_t> pool(free_.end() - std::ptrdiff_t(n), free_.end());
+  free_.resize(free_.size() - n);
+  return pool;
+}
+
+void ImproveTets::give_slots(const std::vector<std::uint32_t>& pool) {
+  free_.insert(free_.end(), pool.begin(), pool.end());
 }
 
 void ImproveTets::link_face(std::uint32_t t, int i, std::uint32_t ref) {
@@ -220,15 +237,14 @@ bool ImproveTets::fresh_in_region(const std::vector<std::uint32_t>& fresh, std::
 bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
                           const std::vector<std::uint32_t>& fresh,
                           std::vector<std::uint32_t>* created, bool boundary_may_change,
-                          bool regions_known) {
-  if (++mark_stamp_ == 0) {
-    std::fill(mark_.begin(), mark_.end(), 0);
-    mark_stamp_ = 1;
-  }
-  for (std::uint32_t t : old) {
-    mark_[t] = mark_stamp_;
+                          bool regions_known, std::vector<std::uint32_t>* pool) {
+  const std::size_t nn = fresh.size() / 4;
+  if (pool && pool->size() + old.size() < nn) return false;  // the pool cannot hold them
+  for (std::uint32_t t : old)
     if (region_[t] != region_[old[0]]) return false;  // the cavity would cross an interface
-  }
+  // A face across to another tet of the cavity is inner. (A search of `old`, a few tets,
+  // rather than per-slot marks: threads replacing disjoint cavities share no scratch.)
+  auto in_old = [&old](std::uint32_t u) { return std::find(old.begin(), old.end(), u) != old.end(); };
   // Entries: the cavity's outer faces (source = the face reference across, or kImproveNone
   // for a boundary face; tag 0) and the new tets' faces (source = 4*k+i; tag 1).
   struct Entry {
@@ -241,10 +257,9 @@ bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
   for (std::uint32_t t : old)
     for (int i = 0; i < 4; ++i) {
       const std::uint32_t r = ta_[4 * std::size_t(t) + i];
-      if (r != kImproveNone && mark_[r >> 2] == mark_stamp_) continue;
+      if (r != kImproveNone && in_old(r >> 2)) continue;
       e.push_back({face_key(&tv_[4 * std::size_t(t)], i), r, 0});
     }
-  const std::size_t nn = fresh.size() / 4;
   if (!regions_known && !fresh_in_region(fresh, old.empty() ? 0 : region_[old[0]])) return false;
   for (std::size_t k = 0; k < nn; ++k)
     for (int i = 0; i < 4; ++i) e.push_back({face_key(&fresh[4 * k], i), std::uint32_t(4 * k + i), 1});
@@ -283,11 +298,11 @@ bool ImproveTets::replace(const std::vector<std::uint32_t>& old,
       if (vtet_[w] == t) vtet_[w] = kImproveNone;
     }
     tv_[4 * std::size_t(t)] = kImproveNone;
-    free_.push_back(t);
+    (pool ? *pool : free_).push_back(t);
   }
   const std::uint32_t reg = old.empty() ? 0 : region_[old[0]];
   for (std::size_t k = 0; k < nn; ++k) {
-    const std::uint32_t t = new_slot();
+    const std::uint32_t t = new_slot(pool ? *pool : free_);
     slot[k] = t;
     for (int i = 0; i < 4; ++i) {
       tv_[4 * std::size_t(t) + i] = fresh[4 * k + i];

@@ -65,9 +65,17 @@ class ImproveTets {
   /// the faces do not match. New tet ids are written to *created (if given).
   /// With `regions_known`, the caller has found fresh_in_region(fresh, region of old[0]) true
   /// (the flip stage tests it on its worker threads).
+  /// With `pool` (dead slots from take_slots), the old slots go to it and the new tets take
+  /// theirs from it (false, changing nothing, if it cannot hold them): threads may then
+  /// replace at once cavities that share no tet and whose outer faces' tets are not in another
+  /// thread's cavity, each with its own pool.
   bool replace(const std::vector<std::uint32_t>& old, const std::vector<std::uint32_t>& fresh,
                std::vector<std::uint32_t>* created = nullptr, bool boundary_may_change = false,
-               bool regions_known = false);
+               bool regions_known = false, std::vector<std::uint32_t>* pool = nullptr);
+  /// n dead slots taken off the free list (the slot arrays grow if it is shorter), for
+  /// replace's `pool`; give_slots puts a pool's slots back on it.
+  std::vector<std::uint32_t> take_slots(std::size_t n);
+  void give_slots(const std::vector<std::uint32_t>& pool);
   /// region_ok for every tet of `fresh` (4 ids per tet) in region r: replace()'s test that new
   /// tets stay in the cavity's body. Thread-safe (reads only).
   bool fresh_in_region(const std::vector<std::uint32_t>& fresh, std::uint32_t r) const;
@@ -221,7 +229,8 @@ class ImproveTets {
   /// (c, d) for which (a, b, c, d) is positive. False if a or b is not in t.
   bool ring_start(std::uint32_t t, std::uint32_t a, std::uint32_t b, std::vector<std::uint32_t>& ring,
                   std::vector<std::uint32_t>& tets, std::uint32_t& c, std::uint32_t& d) const;
-  std::uint32_t new_slot();
+  /// A slot from `from` (a free list), or a new one at the end.
+  std::uint32_t new_slot(std::vector<std::uint32_t>& from);
 
   // Per-slot arrays are allocated without zeroing and filled on all threads (the
   // constructor): zeroed by the allocating thread, their pages cost the paper gear box's main
@@ -232,10 +241,7 @@ class ImproveTets {
   SlotArray<std::uint32_t> tv_, ta_, region_, version_;
   std::vector<std::uint32_t> vtet_, free_;
   std::vector<std::uint8_t> locked_;  // per vertex: on an interface
-  // Scratch of replace().
-  SlotArray<std::uint32_t> mark_;
   SlotArray<std::uint8_t> inside_known_;  // per slot: centroid certified strictly inside
-  std::uint32_t mark_stamp_ = 0;
 };
 
 /// Position of vertex x in the 4 ids at v (0..3), or -1.

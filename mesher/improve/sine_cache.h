@@ -40,6 +40,9 @@ class SineCache {
         if (!m_.alive(std::uint32_t(t))) q_[t] = std::numeric_limits<double>::infinity();
     }, 65536, threads_);
   }
+  /// Holds a value for every slot (+inf for those added since), so that set() never grows it:
+  /// threads may then set different slots at once.
+  void grow() { q_.resize(m_.capacity(), std::numeric_limits<double>::infinity()); }
   /// The slots whose value is below `threshold`, in order (dead slots hold +inf), found on
   /// the cache's threads.
   std::vector<std::uint32_t> below(double threshold) const {
