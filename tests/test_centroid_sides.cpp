@@ -29,7 +29,7 @@ SurfaceMesh sphere(double r, int levels) {
 struct Grid {
   PointSet points;
   std::vector<std::uint32_t> tets;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> neighbours;
+  std::vector<TetPair> neighbours;
 };
 
 Grid kuhn_grid(int n, double s) {
@@ -60,7 +60,7 @@ Grid kuhn_grid(int n, double s) {
         if (q != f) key[w++] = g.tets[4 * t + q];
       std::sort(key.begin(), key.end());
       const auto [it, fresh] = seen.emplace(key, t);
-      if (!fresh) g.neighbours.emplace_back(it->second, t);
+      if (!fresh) g.neighbours.push_back({it->second, t});
     }
   return g;
 }

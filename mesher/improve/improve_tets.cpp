@@ -208,12 +208,12 @@ void ImproveTets::certify_inside() {
       slots.push_back(t);
       sub_tets.insert(sub_tets.end(), v(t), v(t) + 4);
     }
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  std::vector<TetPair> pairs;
   for (std::uint32_t k = 0; k < slots.size(); ++k)
     for (int i = 0; i < 4; ++i) {
       const std::uint32_t a = adj(slots[k], i);
       if (a != kImproveNone && (a >> 2) > slots[k] && sub_of[a >> 2] != kImproveNone)
-        pairs.emplace_back(k, sub_of[a >> 2]);
+        pairs.push_back({k, sub_of[a >> 2]});
     }
   std::vector<std::uint32_t> sub_region;
   if (region_query)

@@ -24,6 +24,8 @@ namespace kdmesh {
 
 namespace {
 
+constexpr std::size_t kShow = 5;  // examples named per failure
+
 std::string xyz(const double* p) {
   std::ostringstream s;
   s.precision(9);
@@ -54,14 +56,65 @@ struct Faces {
     const int* f = kF[rec[i].k % 4];
     return {v[f[0]], v[f[1]], v[f[2]]};
   }
-  /// Calls g(v, i, j) for each run [i, j) of records of one vertex set whose smallest id is v.
+  /// The groups are walked in kChunks ranges of smallest ids, at once: each range's results
+  /// apart, joined in range order, are those of one walk (the same on any thread count).
+  static constexpr std::size_t kChunks = 64;
+  /// The first smallest id of range c (c <= kChunks): the ranges hold about equal numbers of
+  /// records. (Equal numbers of ids would not: a face goes to its smallest id, so low ids hold
+  /// most faces; split by ids, the gear box's group sorts ran 86 % on one of two threads.)
+  std::size_t chunk_begin(std::size_t c) const {
+    if (start.empty()) return 0;
+    if (c >= kChunks) return start.size() - 1;
+    const std::size_t target = start.back() * c / kChunks;
+    return std::size_t(std::lower_bound(start.begin(), start.end() - 1, target) - start.begin());
+  }
+  /// Calls g(c, v, i, j) for each run [i, j) of records of one vertex set whose smallest id is
+  /// v, v in range c; the ranges on up to all cores, each range's runs in order.
   template <class G>
   void each_group(G&& g) const {
-    for (std::size_t v = 0; v + 1 < start.size(); ++v)
-      for (std::size_t i = start[v], j = i; i < start[v + 1]; i = j) {
-        while (j < start[v + 1] && rec[j].rest == rec[i].rest) ++j;
-        g(std::uint32_t(v), i, j);
-      }
+    parallel_for(kChunks, [&](std::size_t cb, std::size_t ce, unsigned) {
+      for (std::size_t c = cb; c < ce; ++c)
+        for (std::size_t v = chunk_begin(c), ve = chunk_begin(c + 1); v < ve; ++v)
+          for (std::size_t i = start[v], j = i; i < start[v + 1]; i = j) {
+            while (j < start[v + 1] && rec[j].rest == rec[i].rest) ++j;
+            g(c, std::uint32_t(v), i, j);
+          }
+    }, 1);
+  }
+};
+
+/// Appends the chunks' vectors to `out` in chunk order.
+template <class T>
+void join(std::vector<std::vector<T>>& parts, std::vector<T>& out) {
+  std::size_t n = out.size();
+  for (const auto& p : parts) n += p.size();
+  out.reserve(n);
+  for (auto& p : parts) {
+    out.insert(out.end(), p.begin(), p.end());
+    std::vector<T>().swap(p);
+  }
+}
+
+/// Up to kShow examples of a failure, found by chunks: each chunk's count and first examples;
+/// joined, the count and the first kShow examples of one walk.
+struct Examples {
+  std::vector<std::size_t> count = std::vector<std::size_t>(Faces::kChunks, 0);
+  std::vector<std::vector<std::string>> text = std::vector<std::vector<std::string>>(Faces::kChunks);
+  /// Counts one in chunk c; true if its example is wanted (then give it to add).
+  bool wanted(std::size_t c) { return count[c]++ < kShow; }
+  void add(std::size_t c, std::string s) { text[c].push_back(std::move(s)); }
+  std::size_t total() const {
+    std::size_t n = 0;
+    for (std::size_t k : count) n += k;
+    return n;
+  }
+  std::string joined() const {
+    std::string out;
+    std::size_t shown = 0;
+    for (const auto& t : text)
+      for (const std::string& s : t)
+        if (shown++ < kShow) out += s;
+    return out;
   }
 };
 
@@ -92,11 +145,11 @@ Faces sorted_faces(const std::vector<std::uint32_t>& tets, std::size_t np) {
         const auto id = sorted_ids(k);
         faces.rec[at] = {(std::uint64_t(id[1]) << 32) | id[2], std::uint32_t(k)};
       });
-  parallel_for(np, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t v = b; v < e; ++v)
+  parallel_for(Faces::kChunks, [&](std::size_t cb, std::size_t ce, unsigned) {
+    for (std::size_t v = faces.chunk_begin(cb); v < faces.chunk_begin(ce); ++v)
       std::sort(faces.rec.begin() + std::ptrdiff_t(faces.start[v]), faces.rec.begin() + std::ptrdiff_t(faces.start[v + 1]),
                 [](const Faces::Rec& a, const Faces::Rec& c) { return a.rest != c.rest ? a.rest < c.rest : a.k < c.k; });
-  }, 1024);
+  }, 1);
   return faces;
 }
 
@@ -125,7 +178,6 @@ bool MeshCheck::only_sizing_failures() const {
 
 namespace {
 
-constexpr std::size_t kShow = 5;  // examples named per failure
 using Tri = std::array<std::uint32_t, 3>;
 
 /// Every id names a point and the array holds whole tets; false (with the failure) if not.
@@ -181,10 +233,14 @@ void check_tets(const VolumeMesh& mesh, const Domain& domain, const Faces& faces
     vol_part[w] += vol;
     for (std::size_t r = 0; r < nr; ++r) region_part[w * nr + r] += rv[r];
   }, 1024, 64);
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
-  pairs.reserve(2 * nt);
-  faces.each_group([&](std::uint32_t, std::size_t i, std::size_t j) {
-    if (j - i == 2) pairs.emplace_back(faces.tet(i), faces.tet(i + 1));
+  // The pairs of tets sharing a face: counted per range, then written at each range's place
+  // (one array, as large as the pairs; not a copy per range).
+  std::vector<std::size_t> at(Faces::kChunks + 1, 0);
+  faces.each_group([&](std::size_t k, std::uint32_t, std::size_t i, std::size_t j) { at[k + 1] += j - i == 2; });
+  for (std::size_t k = 0; k < Faces::kChunks; ++k) at[k + 1] += at[k];
+  std::vector<TetPair, UninitAllocator<TetPair>> pairs(at.back());
+  faces.each_group([&](std::size_t k, std::uint32_t, std::size_t i, std::size_t j) {
+    if (j - i == 2) pairs[at[k]++] = {faces.tet(i), faces.tet(i + 1)};
   });
   const std::vector<std::int8_t> side = rq && regions
                                             ? centroid_sides(pts, mesh.tets, pairs, domain.query, *rq, mesh.tet_region)
@@ -227,25 +283,30 @@ std::pair<std::vector<Tri>, std::vector<Tri>> match_faces(const VolumeMesh& mesh
   const PointSet& pts = mesh.nodes.points;
   const bool regions = domain.regions && mesh.tet_region.size() == mesh.num_tets();
   std::vector<Tri> bnd, ifc;
-  std::size_t overfull = 0, same_side = 0;
-  std::ostringstream over_ex, same_ex;
-  faces.each_group([&](std::uint32_t v, std::size_t i, std::size_t j) {
+  std::vector<std::vector<Tri>> bnd_part(Faces::kChunks), ifc_part(Faces::kChunks);
+  Examples overfull, same_side;
+  faces.each_group([&](std::size_t k, std::uint32_t v, std::size_t i, std::size_t j) {
     if (j - i == 1) {
-      bnd.push_back(faces.out(i));
+      bnd_part[k].push_back(faces.out(i));
     } else if (j - i == 2) {
-      if (regions && mesh.tet_region[faces.tet(i)] != mesh.tet_region[faces.tet(i + 1)]) ifc.push_back(faces.out(i));
-      if (same_cycle(faces.out(i), faces.out(i + 1)) && same_side++ < kShow)
-        same_ex << " tets " << faces.tet(i) << "/" << faces.tet(i + 1);
-    } else if (overfull++ < kShow) {
-      over_ex << " face " << xyz(pts.p(v)) << "-" << xyz(pts.p(std::uint32_t(faces.rec[i].rest >> 32))) << "-"
-              << xyz(pts.p(std::uint32_t(faces.rec[i].rest))) << " in " << (j - i) << " tets";
+      if (regions && mesh.tet_region[faces.tet(i)] != mesh.tet_region[faces.tet(i + 1)])
+        ifc_part[k].push_back(faces.out(i));
+      if (same_cycle(faces.out(i), faces.out(i + 1)) && same_side.wanted(k))
+        same_side.add(k, " tets " + std::to_string(faces.tet(i)) + "/" + std::to_string(faces.tet(i + 1)));
+    } else if (overfull.wanted(k)) {
+      overfull.add(k, " face " + xyz(pts.p(v)) + "-" + xyz(pts.p(std::uint32_t(faces.rec[i].rest >> 32))) + "-" +
+                          xyz(pts.p(std::uint32_t(faces.rec[i].rest))) + " in " + std::to_string(j - i) + " tets");
     }
   });
+  join(bnd_part, bnd);
+  join(ifc_part, ifc);
   c.boundary_faces = bnd.size();
-  if (overfull)
-    c.failures.push_back(std::to_string(overfull) + " face(s) shared by more than two tets, e.g." + over_ex.str());
-  if (same_side)
-    c.failures.push_back(std::to_string(same_side) + " face(s) whose two tets lie on the same side (overlap), e.g." + same_ex.str());
+  if (overfull.total())
+    c.failures.push_back(std::to_string(overfull.total()) + " face(s) shared by more than two tets, e.g." +
+                         overfull.joined());
+  if (same_side.total())
+    c.failures.push_back(std::to_string(same_side.total()) +
+                         " face(s) whose two tets lie on the same side (overlap), e.g." + same_side.joined());
   std::vector<Tri> a, b;
   for (Tri f : bnd) std::sort(f.begin(), f.end()), a.push_back(f);
   for (std::size_t k = 0; k + 2 < mesh.boundary.size(); k += 3) {
