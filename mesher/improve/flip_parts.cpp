@@ -3,6 +3,7 @@
 #include "mesher/improve/flip_parts.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstddef>
@@ -16,6 +17,8 @@ namespace {
 
 /// The cuts of a complete binary tree over the points: node i (children 2i+1, 2i+2) sends a
 /// point with coordinate `axis` below `at` left, else right.
+using Point = std::array<double, 3>;
+
 struct Cut {
   int axis = 0;
   double at = 0;
@@ -27,8 +30,7 @@ struct Cut {
 /// lower axis). The tets at a cut are left to the serial phase: a median cut across the widest
 /// extent falls where the mesh is densest when that is its middle (the gear box's refined
 /// cross-section x = 0: 29 % of the tets below the threshold left with one cut there).
-Cut sparse_cut(const ImproveTets& m, const std::uint32_t* b, const std::uint32_t* e, const double* lo,
-               const double* hi) {
+Cut sparse_cut(const Point* b, const Point* e, const double* lo, const double* hi) {
   constexpr int kBins = 64;
   const double width = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) / kBins;
   const double n = double(e - b);
@@ -39,8 +41,7 @@ Cut sparse_cut(const ImproveTets& m, const std::uint32_t* b, const std::uint32_t
   for (int a = 0; a < 3 && width > 0; ++a) {
     const int bins = std::max(1, std::min(kBins, int(std::ceil((hi[a] - lo[a]) / width))));
     std::size_t count[kBins] = {};
-    for (const std::uint32_t* v = b; v != e; ++v)
-      ++count[std::min(bins - 1, std::max(0, int((m.p(*v)[a] - lo[a]) / width)))];
+    for (const Point* v = b; v != e; ++v) ++count[std::min(bins - 1, std::max(0, int(((*v)[a] - lo[a]) / width)))];
     std::size_t below = 0;
     for (int k = 1; k < bins; ++k) {
       below += count[k - 1];
@@ -60,32 +61,31 @@ Cut sparse_cut(const ImproveTets& m, const std::uint32_t* b, const std::uint32_t
   for (int a = 1; a < 3; ++a)
     if (hi[a] - lo[a] > hi[best.axis] - lo[best.axis]) best.axis = a;
   std::vector<double> x;
-  for (const std::uint32_t* v = b; v != e; ++v) x.push_back(m.p(*v)[best.axis]);
+  for (const Point* v = b; v != e; ++v) x.push_back((*v)[best.axis]);
   std::nth_element(x.begin(), x.begin() + std::ptrdiff_t(x.size() / 2), x.end());
   best.at = x[x.size() / 2];
   return best;
 }
 
-void split(const ImproveTets& m, std::uint32_t* b, std::uint32_t* e, std::size_t node, unsigned depth,
-           std::vector<Cut>& cuts) {
+void split(Point* b, Point* e, std::size_t node, unsigned depth, std::vector<Cut>& cuts) {
   if (depth == 0) return;
   Cut& cut = cuts[node];
   if (e - b >= 2) {
     double lo[3], hi[3];
-    for (int k = 0; k < 3; ++k) lo[k] = hi[k] = m.p(*b)[k];
-    for (const std::uint32_t* v = b; v != e; ++v)
+    for (int k = 0; k < 3; ++k) lo[k] = hi[k] = (*b)[k];
+    for (const Point* v = b; v != e; ++v)
       for (int k = 0; k < 3; ++k) {
-        lo[k] = std::min(lo[k], m.p(*v)[k]);
-        hi[k] = std::max(hi[k], m.p(*v)[k]);
+        lo[k] = std::min(lo[k], (*v)[k]);
+        hi[k] = std::max(hi[k], (*v)[k]);
       }
-    cut = sparse_cut(m, b, e, lo, hi);
+    cut = sparse_cut(b, e, lo, hi);
   } else if (e - b == 1) {
-    cut.at = m.p(*b)[0];
+    cut.at = (*b)[0];
   }
-  // The halves as the rule sends them (ties at the median go right).
-  std::uint32_t* mid = std::partition(b, e, [&](std::uint32_t x) { return m.p(x)[cut.axis] < cut.at; });
-  split(m, b, mid, 2 * node + 1, depth - 1, cuts);
-  split(m, mid, e, 2 * node + 2, depth - 1, cuts);
+  // The halves as the rule sends them (ties at the cut go right).
+  Point* mid = std::partition(b, e, [&](const Point& x) { return x[cut.axis] < cut.at; });
+  split(b, mid, 2 * node + 1, depth - 1, cuts);
+  split(mid, e, 2 * node + 2, depth - 1, cuts);
 }
 
 }  // namespace
@@ -95,11 +95,12 @@ FlipParts flip_parts(const ImproveTets& m, const std::vector<std::uint32_t>& see
   if (levels > 7) throw UsageError("flip_parts: at most 7 levels (128 parts)");
   FlipParts parts;
   parts.count = 1u << levels;
-  std::vector<std::uint32_t> pts;
-  pts.reserve(seeds.size());
-  for (const std::uint32_t t : seeds) pts.push_back(m.v(t)[0]);
+  std::vector<Point> pts(seeds.size());  // (copied once: the cuts read them levels x 4 times)
+  parallel_for(seeds.size(), [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t k = b; k < e; ++k) std::copy_n(m.p(m.v(seeds[k])[0]), 3, pts[k].begin());
+  }, 1 << 16, threads);
   std::vector<Cut> cuts(parts.count);  // parts.count - 1 inner nodes
-  split(m, pts.data(), pts.data() + pts.size(), 0, levels, cuts);
+  split(pts.data(), pts.data() + pts.size(), 0, levels, cuts);
   const std::size_t np = m.nodes().size_count();
   std::vector<std::uint8_t> owner(np);
   parallel_for(np, [&](std::size_t b, std::size_t e, unsigned) {

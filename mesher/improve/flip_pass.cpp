@@ -251,7 +251,6 @@ std::size_t work_parts(ImproveTets& m, SineCache& cache, const std::vector<std::
     counts.in_parts += pt.ops;
     ops += pt.ops;
   }
-  counts.left_by_parts += rest.size();
   return ops;
 }
 
@@ -269,7 +268,22 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
   std::vector<Entry> first;
   std::size_t ops = 0;
   if (schedule.levels(below.size()) > 0) {
-    ops = work_parts(m, cache, below, threshold, max_ring, boundary, schedule, team.get(), counts, first);
+    // Phases of parts, each on the tets the one before left (those near its cuts: the next
+    // cuts fall elsewhere), while they are enough for one.
+    std::vector<std::uint32_t> seeds = below;
+    for (unsigned phase = 0;; ++phase) {
+      first.clear();
+      ops += work_parts(m, cache, seeds, threshold, max_ring, boundary, schedule, team.get(), counts, first);
+      std::erase_if(first, [&m](const Entry& e) {
+        return !m.alive(std::get<1>(e)) || m.version(std::get<1>(e)) != std::get<2>(e);
+      });
+      if (phase + 1 >= schedule.max_phases || schedule.levels(first.size()) == 0) {
+        counts.left_by_parts += first.size();
+        break;
+      }
+      seeds.clear();
+      for (const Entry& e : first) seeds.push_back(std::get<1>(e));
+    }
   } else {
     first.reserve(below.size());
     for (std::uint32_t t : below) first.emplace_back(cache.q()[t], t, m.version(t));

@@ -16,7 +16,7 @@ struct FlipCounts {
   /// With several threads: choices made again on the changed mesh, choices made in an earlier
   /// batch and still valid when their tet came up, tets sent back to the queue.
   std::size_t chosen_again = 0, reused = 0, requeued = 0;
-  /// The parallel phase: flips made in the parts, entries left to the serial phase.
+  /// The parallel phases: flips made in the parts, tets they left to the serial phase.
   std::size_t in_parts = 0, left_by_parts = 0;
 };
 
@@ -25,9 +25,13 @@ struct FlipSchedule {
   /// With n >= 2 * part_tets tets below the threshold the stage begins with a parallel phase:
   /// the mesh split into 2^k parts, k = min(max_levels, floor(log2(n / part_tets))) (so about
   /// part_tets or more of them each; mesher/improve/flip_parts.h), each part's tets worked
-  /// apart; the tets near a cut and what the parts leave are then worked in one queue.
+  /// apart; what the parts leave (the tets near a cut, ...) is then worked in one queue.
   std::size_t part_tets = 32768;
   unsigned max_levels = 5;
+  /// Phases of parts at most: each next one splits, likewise, the tets the one before left, if
+  /// enough for a split (the gear box: 2.33M tets below the threshold, 715k left by a first
+  /// phase of 32 parts).
+  unsigned max_phases = 3;
   /// Each part's dead slots for the tets it makes: its tets below the threshold / pool_per,
   /// at least min_pool (a flip the pool cannot hold is left to the serial phase).
   std::size_t pool_per = 16, min_pool = 1024;
