@@ -1105,31 +1105,43 @@ Piped gear_towards_a_section() {
   return p;
 }
 
+/// The boundary context of p's surface, with its sharp edges `features`.
+BoundaryContext boundary_of(const Piped& p, const FeatureEdges& features) {
+  BoundaryContext boundary;
+  boundary.surface = &p.surface;
+  boundary.query = p.query.get();
+  boundary.sizing = &p.sizing;
+  boundary.features = &features;
+  return boundary;
+}
+
+/// p's mesh after one flip stage (30 deg, rings up to 10) on `threads` threads; checks that the
+/// flips counted are those made, that the sine cache is current and the adjacency consistent.
+VolumeMesh flipped(const Piped& p, const BoundaryContext& boundary, unsigned threads, FlipCounts& counts,
+                   const FlipSchedule& schedule) {
+  VolumeMesh vm = p.mesh;
+  ImproveTets m(vm.nodes, vm.tets, vm.tet_region);
+  m.inside_query = p.query.get();
+  m.certify_inside();
+  SineCache cache(m, threads);
+  const std::size_t ops = flip_pass(m, cache, deg_to_sine(30), 10, counts, &boundary, threads, schedule);
+  EXPECT_EQ(ops, counts.edge_removals + counts.face_removals + counts.boundary_flips);
+  // The cache is current: the new tets' sines, computed with the choices, are refresh's.
+  EXPECT_EQ(cache.q(), SineCache(m, 1).q()) << threads << " threads";
+  expect_consistent(m);
+  m.write_back(vm);
+  return vm;
+}
+
 TEST(FlipPass, BatchesOnSeveralThreadsMakeTheOneThreadFlips) {
   FlipCounts all;
+  FlipSchedule whole_queue;  // the batches on the one queue, without a parallel phase
+  whole_queue.max_levels = 0;
   for (const auto& [h, at] : std::vector<std::pair<double, double>>{{0.07, 0.5}, {0.06, 0.2}, {0.05, 0.9}, {0, 0}}) {
     const Piped p = h > 0 ? pipeline({{0, 0, 0, 1, 1, 1}}, h, at) : gear_towards_a_section();
     const FeatureEdges features = detect_sharp_edges(p.surface.mesh, 30);
-    BoundaryContext boundary;
-    boundary.surface = &p.surface;
-    boundary.query = p.query.get();
-    boundary.sizing = &p.sizing;
-    boundary.features = &features;
-    auto run = [&](unsigned threads, FlipCounts& counts) {
-      VolumeMesh vm = p.mesh;
-      ImproveTets m(vm.nodes, vm.tets, vm.tet_region);
-      m.inside_query = p.query.get();
-      m.certify_inside();
-      SineCache cache(m, threads);
-      FlipSchedule whole_queue;  // the batches on the one queue, without a parallel phase
-      whole_queue.max_levels = 0;
-      const std::size_t ops = flip_pass(m, cache, deg_to_sine(30), 10, counts, &boundary, threads, whole_queue);
-      EXPECT_EQ(ops, counts.edge_removals + counts.face_removals + counts.boundary_flips);
-      // The cache is current: the new tets' sines, computed with the choices, are refresh's.
-      EXPECT_EQ(cache.q(), SineCache(m, 1).q()) << threads << " threads";
-      m.write_back(vm);
-      return vm;
-    };
+    const BoundaryContext boundary = boundary_of(p, features);
+    auto run = [&](unsigned threads, FlipCounts& counts) { return flipped(p, boundary, threads, counts, whole_queue); };
     FlipCounts one;
     const VolumeMesh ref = run(1, one);
     EXPECT_GT(one.edge_removals, 1000u) << "h " << h;
@@ -1166,26 +1178,13 @@ TEST(FlipPass, PartsWorkedOnAnyThreadCountMakeTheSameValidMesh) {
   for (const double h : {0.0, 0.06}) {
     const Piped p = h > 0 ? pipeline({{0, 0, 0, 1, 1, 1}}, h, 0.2) : gear_towards_a_section();
     const FeatureEdges features = detect_sharp_edges(p.surface.mesh, 30);
-    BoundaryContext boundary;
-    boundary.surface = &p.surface;
-    boundary.query = p.query.get();
-    boundary.sizing = &p.sizing;
-    boundary.features = &features;
-    auto run = [&](unsigned threads, FlipCounts& counts) {
+    const BoundaryContext boundary = boundary_of(p, features);
+    {
       VolumeMesh vm = p.mesh;
       ImproveTets m(vm.nodes, vm.tets, vm.tet_region);
-      m.inside_query = p.query.get();
-      m.certify_inside();
-      SineCache cache(m, threads);
-      const double threshold = deg_to_sine(30);
-      EXPECT_GE(parts.levels(cache.below(threshold).size()), 3u) << "h " << h;
-      const std::size_t ops = flip_pass(m, cache, threshold, 10, counts, &boundary, threads, parts);
-      EXPECT_EQ(ops, counts.edge_removals + counts.face_removals + counts.boundary_flips);
-      EXPECT_EQ(cache.q(), SineCache(m, 1).q()) << threads << " threads";
-      expect_consistent(m);
-      m.write_back(vm);
-      return vm;
-    };
+      EXPECT_GE(parts.levels(SineCache(m, 1).below(deg_to_sine(30)).size()), 3u) << "h " << h;
+    }
+    auto run = [&](unsigned threads, FlipCounts& counts) { return flipped(p, boundary, threads, counts, parts); };
     FlipCounts one;
     const VolumeMesh ref = run(1, one);
     EXPECT_GT(one.in_parts, 100u) << "h " << h;
