@@ -170,8 +170,8 @@ bool make(ImproveTets& m, SineCache& cache, FlipChoice& c, double threshold, Fli
   return true;
 }
 
-/// One part of the parallel phase: its tets' entries, the entries it leaves to the serial
-/// phase, its dead slots and its counts.
+/// One part of a phase of parts: its tets' entries, the entries it leaves (to the next phase
+/// or the serial phase), its dead slots and its counts.
 struct Part {
   std::vector<Entry> first, left;
   std::vector<std::uint32_t> pool;
@@ -181,7 +181,7 @@ struct Part {
 
 /// Works part p's queue, worst first, one tet at a time, as the serial phase would on the
 /// part alone: a tet not held by the part (parts.holds), or whose choice needs a star outside
-/// it, or whose flip needs more slots than the part's pool has, is left to the serial phase.
+/// it, or whose flip needs more slots than the part's pool has, is left.
 /// Every tet it reads or changes has its four vertices in the part, so the parts run at once.
 void work_part(ImproveTets& m, SineCache& cache, const FlipParts& parts, std::uint8_t p, Part& part,
                double threshold, int max_ring, const BoundaryContext* boundary) {
@@ -212,10 +212,10 @@ void work_part(ImproveTets& m, SineCache& cache, const FlipParts& parts, std::ui
   }
 }
 
-/// The parallel phase: the tets `below` split into parts (flip_parts), each part worked apart
-/// (work_part), the parts shared out over the team's threads. Appends the entries left to the
-/// serial phase to `rest`; returns the flips made. The result depends only on the mesh and
-/// the schedule: the parts change disjoint sets of tets, each from its own dead slots.
+/// One phase of parts: the tets `below` split into parts (flip_parts), each part worked apart
+/// (work_part), the parts shared out over the team's threads. Appends the entries the parts
+/// left to `rest`; returns the flips made. The result depends only on the mesh and the
+/// schedule: the parts change disjoint sets of tets, each from its own dead slots.
 std::size_t work_parts(ImproveTets& m, SineCache& cache, const std::vector<std::uint32_t>& below,
                        double threshold, int max_ring, const BoundaryContext* boundary,
                        const FlipSchedule& schedule, WorkerTeam* team, FlipCounts& counts,
