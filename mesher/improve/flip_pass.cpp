@@ -264,13 +264,13 @@ std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int ma
   // housing), near the cost of starting a thread: the threads are started once, not per batch.
   std::unique_ptr<WorkerTeam> team;
   if (asked > 1) team = std::make_unique<WorkerTeam>(asked);
-  const std::vector<std::uint32_t> below = cache.below(threshold);
+  std::vector<std::uint32_t> below = cache.below(threshold);
   std::vector<Entry> first;
   std::size_t ops = 0;
   if (schedule.levels(below.size()) > 0) {
     // Phases of parts, each on the tets the one before left (those near its cuts: the next
     // cuts fall elsewhere), while they are enough for one.
-    std::vector<std::uint32_t> seeds = below;
+    std::vector<std::uint32_t> seeds = std::move(below);
     for (unsigned phase = 0;; ++phase) {
       first.clear();
       ops += work_parts(m, cache, seeds, threshold, max_ring, boundary, schedule, team.get(), counts, first);

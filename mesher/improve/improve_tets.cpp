@@ -223,26 +223,16 @@ void ImproveTets::certify_inside() {
       std::copy_n(v(slots[k]), 4, &sub_tets[4 * k]);
     }
   }, 1 << 16);
-  // The pairs (k, j > k's slot) counted per range of slots, then written at the range's place.
-  constexpr std::size_t kRanges = 64;
-  auto range = [ns](std::size_t r) { return ns * r / kRanges; };
-  auto each_pair = [&](std::size_t r, auto&& f) {
-    for (std::size_t k = range(r); k < range(r + 1); ++k)
-      for (int i = 0; i < 4; ++i) {
-        const std::uint32_t a = adj(slots[k], i);
-        if (a != kImproveNone && (a >> 2) > slots[k] && sub_of[a >> 2] != kImproveNone)
-          f(TetPair{std::uint32_t(k), sub_of[a >> 2]});
-      }
-  };
-  std::vector<std::size_t> at(kRanges + 1, 0);
-  parallel_for(kRanges, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t r = b; r < e; ++r) each_pair(r, [&](const TetPair&) { ++at[r + 1]; });
-  }, 1);
-  for (std::size_t r = 0; r < kRanges; ++r) at[r + 1] += at[r];
-  std::vector<TetPair, UninitAllocator<TetPair>> pairs(at.back());
-  parallel_for(kRanges, [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t r = b; r < e; ++r) each_pair(r, [&](const TetPair& q) { pairs[at[r]++] = q; });
-  }, 1);
+  // The faces (4 k + i) of tet slots[k] whose tet across is a later one of them, and the pairs.
+  auto across = [&](std::size_t f) { return adj(slots[f / 4], int(f % 4)); };
+  const std::vector<std::uint32_t> faces = parallel_collect(4 * ns, [&](std::size_t f) {
+    const std::uint32_t a = across(f);
+    return a != kImproveNone && (a >> 2) > slots[f / 4] && sub_of[a >> 2] != kImproveNone;
+  });
+  std::vector<TetPair, UninitAllocator<TetPair>> pairs(faces.size());
+  parallel_for(faces.size(), [&](std::size_t b, std::size_t e, unsigned) {
+    for (std::size_t j = b; j < e; ++j) pairs[j] = {faces[j] / 4, sub_of[across(faces[j]) >> 2]};
+  }, 1 << 16);
   std::vector<std::uint32_t> sub_region;
   if (region_query)
     for (const std::uint32_t t : slots) sub_region.push_back(region_[t]);
