@@ -259,7 +259,7 @@ struct LayerBatch {
   std::vector<LayerTry> tries;
 };
 
-/// Draws the next batch's tries (up to 2^15) from the surface nodes from *i on, in id order,
+/// Draws the next batch's tries (up to 2^14) from the surface nodes from *i on, in id order,
 /// three draws each from rng; advances *i.
 void draw_layer_batch(const SurfaceMesh& surface, const NodeSet& nodes, const InteriorFillOptions& options,
                       std::size_t surface_nodes, std::size_t& i, Rng& rng, LayerBatch& out) {
@@ -345,31 +345,31 @@ void add_boundary_layer(const SurfaceMesh& surface, const SurfaceQuery& query,
   Rng rng(options.seed ^ 0x6c8e9cf570932bd5ULL);
   const unsigned nthreads = std::max(1u, options.threads);
   WorkerTeam team(nthreads);
+  // A batch's tests in blocks of tries, each block taken by whichever thread is free.
+  auto test_blocks = [&](LayerBatch& in, std::atomic<std::size_t>& claim) {
+    constexpr std::size_t kBlock = 1024;
+    const std::size_t blocks = (in.tries.size() + kBlock - 1) / kBlock;
+    for (std::size_t k; (k = claim.fetch_add(1)) < blocks;)
+      for (std::size_t j = k * kBlock; j < std::min(in.tries.size(), (k + 1) * kBlock); ++j)
+        test_layer_try(in, grid, sizing, options, in.tries[j]);
+  };
   LayerBatch cur, next;
   std::size_t i = 0;
   draw_layer_batch(surface, nodes, options, surface_nodes, i, rng, cur);
-  parallel_for(cur.tries.size(), [&](std::size_t b, std::size_t e, unsigned) {
-    for (std::size_t j = b; j < e; ++j) test_layer_try(cur, grid, sizing, options, cur.tries[j]);
-  }, 1024, nthreads);
+  std::atomic<std::size_t> first_claim{0};
+  team.run([&](unsigned) { test_blocks(cur, first_claim); });
   std::vector<std::array<double, 4>> before;  // accepted in the batch before: (p, h)
   while (!cur.tries.empty()) {
     draw_layer_batch(surface, nodes, options, surface_nodes, i, rng, next);
-    // Batch k + 1's tests (against the grid without batch k's nodes) in blocks on the other
-    // threads while this one decides batch k, then on all.
-    constexpr std::size_t kBlock = 1024;
-    const std::size_t blocks = (next.tries.size() + kBlock - 1) / kBlock;
+    // Batch k + 1's tests (against the grid without batch k's nodes) on the other threads
+    // while this one decides batch k, then on all.
     std::atomic<std::size_t> claim{0};
-    auto test_blocks = [&] {
-      for (std::size_t k; (k = claim.fetch_add(1)) < blocks;)
-        for (std::size_t j = k * kBlock; j < std::min(next.tries.size(), (k + 1) * kBlock); ++j)
-          test_layer_try(next, grid, sizing, options, next.tries[j]);
-    };
     SpacingGrid batch(grid.lo(), grid.s0());
     batch.set_lipschitz(sizing.options().gradation);
     for (const auto& q : before) batch.insert(q.data(), q[3]);
     std::vector<std::array<double, 4>> accepted;
     team.run([&](unsigned w) {
-      if (w > 0) return test_blocks();
+      if (w > 0) return test_blocks(next, claim);
       for (const LayerTry& tr : cur.tries) {
         if (tr.clash || batch.conflicts(tr.p, tr.h, options.beta)) continue;
         // Distance and side here, for the tries left: speculated for every try without a
@@ -384,7 +384,7 @@ void add_boundary_layer(const SurfaceMesh& surface, const SurfaceQuery& query,
         nodes.push_back(tr.p, NodeKind::interior, kNoFacet, float(tr.h));
         accepted.push_back({tr.p[0], tr.p[1], tr.p[2], tr.h});
       }
-      test_blocks();
+      test_blocks(next, claim);
     });
     st.layer_nodes += accepted.size();
     for (const auto& q : accepted) grid.insert(q.data(), q[3]);
