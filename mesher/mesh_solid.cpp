@@ -623,7 +623,8 @@ MeshResult run(const Job& job, std::vector<NamedSurface> bodies, bool named) {
   // The size fidelity reads the mesh only: it runs beside the per-tet measures (both passes
   // leave a core idle much of their time; the paper gear box's quality stage took 8.3 s in a
   // row). Its figures do not depend on the threads.
-  std::future<SizeFidelity> fidelity = std::async(std::launch::async, [&m] {
+  // (async | deferred: where no thread can be started, it runs at get(), not throw.)
+  std::future<SizeFidelity> fidelity = std::async(std::launch::async | std::launch::deferred, [&m] {
     return measure_size_fidelity(m.mesh.nodes.points, m.mesh.tets, m.sizing);
   });
   // One pass of per-tet measures: the writers' cell data, the summary and each body's extremes.

@@ -873,30 +873,6 @@ Slabs pick_slabs(const Store& s, const std::vector<std::uint32_t>& todo, const D
   return slabs;
 }
 
-/// Runs work(w) for w in [0, threads) on `threads` threads (w = 0 on the caller's) and
-/// rethrows the first exception.
-template <class Work>
-void run_workers(unsigned threads, const Work& work) {
-  std::vector<std::thread> pool;
-  std::vector<std::exception_ptr> errors(threads);
-  for (unsigned w = 1; w < threads; ++w)
-    pool.emplace_back([&, w] {
-      try {
-        work(w);
-      } catch (...) {
-        errors[w] = std::current_exception();
-      }
-    });
-  try {
-    work(0);
-  } catch (...) {
-    errors[0] = std::current_exception();
-  }
-  for (std::thread& t : pool) t.join();
-  for (const std::exception_ptr& e : errors)
-    if (e) std::rethrow_exception(e);
-}
-
 /// Inserts the ranks rank_at(i), i < count, with `k`, looking their hints up a batch at a time:
 /// independent loads, where hint_of() at the head of each insertion is a dependent random load
 /// (rank_of) that stalls it (1M axes points, one thread: -8%. 1M cube points, two threads,

@@ -75,8 +75,10 @@ void sort_level(std::uint32_t* ids, std::uint32_t* hints, std::size_t m, const s
 Ordering make_kd_hilbert_order(const PointSet& points, unsigned threads) {
   // The keys are computed beside the tree's first, single-threaded partition. (std::async:
   // an exception reaches get(), and the future waits for its task if the tree throws.)
-  const auto launch = threads != 1 && points.size() >= kThreadThreshold ? std::launch::async
-                                                                       : std::launch::deferred;
+  // (async | deferred: where no thread can be started, the keys are computed at get().)
+  const auto launch = threads != 1 && points.size() >= kThreadThreshold
+                          ? std::launch::async | std::launch::deferred
+                          : std::launch::deferred;
   std::future<std::vector<std::uint64_t>> key_task =
       std::async(launch, [&points] { return hilbert::point_keys(points); });
   Ordering bfs = make_kd_order(points, false, threads);

@@ -466,10 +466,9 @@ void InteriorLattice::work() {
 void InteriorLattice::stop() { impl_->next.store(impl_->nroots); }
 
 void InteriorLattice::work_on(unsigned threads) {
-  std::vector<std::thread> pool;
-  for (unsigned w = 1; w < threads; ++w) pool.emplace_back([this] { work(); });
-  work();
-  for (auto& t : pool) t.join();
+  // work() takes blocks until none is left (and never throws), so a worker whose thread could
+  // not be started and runs after the others (run_workers) finds nothing left to do.
+  run_workers(threads, [this](unsigned) { work(); });
 }
 
 InteriorFillStats InteriorLattice::finish(const SurfaceMesh& surface, SpacingGrid& grid, NodeSet& nodes,

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <system_error>
 #include <thread>
 
 #include "core/error.h"
@@ -119,7 +120,13 @@ NodeSet place_nodes(const Domain& domain, const FeatureEdges& features,
       thread.join();
     }
   } helper{lattice, {}};
-  if (io.threads > 1) helper.thread = std::thread([&lattice] { lattice.work(); });
+  if (io.threads > 1) {
+    try {
+      helper.thread = std::thread([&lattice] { lattice.work(); });
+    } catch (const std::system_error&) {
+      // No thread (a limit on processes and threads): the lattice is generated below, here.
+    }
+  }
 
   progress("edges", 0);
   SpacingGrid feature_balls(glo, s0);
