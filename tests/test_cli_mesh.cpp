@@ -482,6 +482,39 @@ TEST(CliBatch, CrashedJobIsIsolatedAndLeavesNoTemporaries) {
       << "the crash must come after the first output was opened:\n" << r.err;
 }
 
+// Under a limit on processes and threads (a batch system's task limit, `ulimit -u`): the
+// batch as an unprivileged user with RLIMIT_NPROC 2 can start one job process, which can
+// start no thread.
+// Regression: the batch stopped with "cannot start a job process" when its second job's
+// fork failed, and a job process whose threads could not start failed with "internal error:
+// Resource temporarily unavailable". Now the jobs run one at a time, each on its one thread,
+// and give the nodes of a run without the limit.
+TEST(CliBatch, RegressionProcessLimitRunsTheJobsFewerAtATime) {
+  if (::geteuid() != 0) GTEST_SKIP() << "needs root, to run the batch as another user under RLIMIT_NPROC";
+  const fs::path yaml = write_three_job_batch();
+  const fs::path free_dir = tmpdir() / "batch-nproc-free", dir = tmpdir() / "batch-nproc";
+  for (const fs::path& d : {free_dir, dir}) {
+    fs::remove_all(d);
+    fs::create_directories(d);
+    fs::permissions(d, fs::perms::all);  // the other user writes there
+  }
+  const std::string args = "batch " + yaml.string() + " --jobs 2 --only big,small --json --out-dir ";
+  const CliResult free = kdmesh(args + free_dir.string());
+  ASSERT_EQ(free.code, 0) << free.err;
+  // The limit counts every process of the user: a user id of this test alone (ctest runs
+  // tests at once), one that no one else uses.
+  const std::string user = std::to_string(50000 + ::getpid() % 10000);
+  const CliResult r = kdmesh::test::run_kdmesh(
+      args + dir.string(), tmpdir(), "prlimit --nproc=2:2 setpriv --reuid=" + user + " --regid=" + user + " --clear-groups");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("cannot start another job process"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("running 1 job(s) at a time"), std::string::npos) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["succeeded"], 2);
+  for (const char* f : {"big.xyz", "small.xyz"}) EXPECT_EQ(slurp(dir / f), slurp(free_dir / f)) << f;
+  EXPECT_FALSE(slurp(dir / "big.xyz").empty());
+  EXPECT_FALSE(has_temp_leftovers(dir));
+}
+
 TEST(CliBatch, HumanTableNamesTheFailedJob) {
   const fs::path yaml = write_three_job_batch();
   const fs::path dir = tmpdir() / "batch-human";

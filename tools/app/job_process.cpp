@@ -170,9 +170,20 @@ std::vector<MeshJobResult> run_jobs_in_processes(
       const MeshJobCallbacks cb = callbacks ? callbacks(i) : MeshJobCallbacks{};
       const pid_t pid = ::fork();
       if (pid < 0) {
+        const int err = errno;
         ::close(fds[0]);
         ::close(fds[1]);
-        throw Error(std::string("cannot start a job process: ") + std::strerror(errno));
+        if (err == EAGAIN && !running.empty()) {
+          // A limit on processes (a batch system's, ulimit -u): the jobs left wait for those
+          // running, at most as many at once as run now.
+          --next;
+          workers = unsigned(running.size());
+          std::cerr << ("kdmesh: cannot start another job process (" + std::string(std::strerror(err)) +
+                        "): running " + std::to_string(workers) + " job(s) at a time\n")
+                    << std::flush;
+          break;
+        }
+        throw Error(std::string("cannot start a job process: ") + std::strerror(err));
       }
       if (pid == 0) {
         ::close(fds[0]);
