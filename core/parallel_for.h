@@ -1,8 +1,10 @@
-// kdmesh — fork-join on a few std::threads: run_workers (one job per worker) and parallel_for
-// (an index range in one chunk per worker).
+// kdmesh — fork-join on a few std::threads: run_workers (one job per worker), parallel_for
+// (an index range in one chunk per worker) and parallel_blocks (in blocks taken by free
+// workers).
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #pragma once
 #include <algorithm>
+#include <atomic>
 #include <cstddef>
 #include <exception>
 #include <system_error>
@@ -61,6 +63,29 @@ void parallel_for(std::size_t n, Body&& body, std::size_t grain = 4096, unsigned
   run_workers(workers, [&](unsigned w) {
     const std::size_t b = std::min(n, w * chunk), e = std::min(n, b + chunk);
     if (b < e) body(b, e, w);
+  });
+}
+
+/// Calls body(begin, end, worker) on blocks of `block` indices covering [0, n), each block
+/// taken by whichever of up to `max_workers` threads (0 = hardware concurrency) is free, for
+/// loops whose items differ in cost (one chunk per worker, as parallel_for gives, leaves a core
+/// idle while the other finishes the costly part). Which worker runs a block depends on the
+/// timing, so bodies must give per-index results. The first exception thrown (lowest worker)
+/// is rethrown once every worker has stopped; blocks after it may not have run.
+template <class Body>
+void parallel_blocks(std::size_t n, std::size_t block, Body&& body, unsigned max_workers = 0) {
+  block = std::max<std::size_t>(1, block);
+  const std::size_t blocks = (n + block - 1) / block;
+  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  const unsigned workers = unsigned(std::min<std::size_t>(max_workers ? std::min(max_workers, hw) : hw, blocks));
+  if (workers <= 1) {
+    for (std::size_t k = 0; k < blocks; ++k) body(k * block, std::min(n, (k + 1) * block), 0u);
+    return;
+  }
+  std::atomic<std::size_t> next{0};
+  run_workers(workers, [&](unsigned w) {
+    for (std::size_t k; (k = next.fetch_add(1, std::memory_order_relaxed)) < blocks;)
+      body(k * block, std::min(n, (k + 1) * block), w);
   });
 }
 

@@ -69,17 +69,17 @@ struct Faces {
     return std::size_t(std::lower_bound(start.begin(), start.end() - 1, target) - start.begin());
   }
   /// Calls g(c, v, i, j) for each run [i, j) of records of one vertex set whose smallest id is
-  /// v, v in range c; the ranges on up to all cores, each range's runs in order.
+  /// v, v in range c; the ranges taken by free cores, each range's runs in order.
   template <class G>
   void each_group(G&& g) const {
-    parallel_for(kChunks, [&](std::size_t cb, std::size_t ce, unsigned) {
+    parallel_blocks(kChunks, 1, [&](std::size_t cb, std::size_t ce, unsigned) {
       for (std::size_t c = cb; c < ce; ++c)
         for (std::size_t v = chunk_begin(c), ve = chunk_begin(c + 1); v < ve; ++v)
           for (std::size_t i = start[v], j = i; i < start[v + 1]; i = j) {
             while (j < start[v + 1] && rec[j].rest == rec[i].rest) ++j;
             g(c, std::uint32_t(v), i, j);
           }
-    }, 1);
+    });
   }
 };
 
@@ -314,8 +314,7 @@ std::pair<std::vector<Tri>, std::vector<Tri>> match_faces(const VolumeMesh& mesh
     std::sort(f.begin(), f.end());
     b.push_back(f);
   }
-  std::sort(a.begin(), a.end());
-  std::sort(b.begin(), b.end());
+  run_workers(2, [&](unsigned w) { std::sort((w ? b : a).begin(), (w ? b : a).end()); });
   if (a != b)
     c.failures.push_back("the mesh's boundary list (" + std::to_string(b.size()) +
                          " faces) differs from the faces found in its tets (" + std::to_string(a.size()) + ")");
@@ -565,8 +564,12 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain, const 
   const FacetBound bound{domain.surface.mesh, mesh.nodes.facet, kOnSurfaceDistance * std::sqrt(diag)};
   check_boundary_vertices(mesh, domain, bnd, bound, c);
   const std::vector<double> fdist = check_boundary_faces(mesh, domain, bnd, bound, options, c);
-  check_open_edges(pts, bnd, c);
-  check_vertex_fans(pts, bnd, c);
+  {  // independent walks over the boundary faces, on two threads; failures in this order
+    MeshCheck fans;
+    run_workers(2, [&](unsigned w) { w == 0 ? check_open_edges(pts, bnd, c) : check_vertex_fans(pts, bnd, fans); });
+    c.nonmanifold_vertices = fans.nonmanifold_vertices;
+    c.failures.insert(c.failures.end(), fans.failures.begin(), fans.failures.end());
+  }
   check_interfaces(mesh, domain, ifc, bound.on_surface, options, c);
   check_volume(mesh, domain, bnd, fdist, options, c);
   if (c.tets == 0) c.failures.push_back("the mesh has no tets");
