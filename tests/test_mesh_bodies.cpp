@@ -168,6 +168,21 @@ TEST(MeshBodies, TouchingBoxesAreMeshedWithOneConformingInterface) {
   EXPECT_EQ(r.report.check.interface_faces, ifc.size());
   EXPECT_EQ(r.report.check.straddling_tets, 0u);
   EXPECT_GE(r.report.quality.min_dihedral, 12.0);
+  // Each body's dihedral extremes are those of its own tets, exactly (one loop here; the
+  // report gathers them on several threads as the quality pass goes).
+  std::vector<double> lo(2, 180), hi(2, 0);
+  for (std::size_t t = 0; t < m.num_tets(); ++t) {
+    const std::uint32_t* v = &m.tets[4 * t];
+    const TetQuality q = tet_quality(m.nodes.points.p(v[0]), m.nodes.points.p(v[1]), m.nodes.points.p(v[2]),
+                                     m.nodes.points.p(v[3]));
+    lo[m.tet_region[t]] = std::min(lo[m.tet_region[t]], q.min_dihedral);
+    hi[m.tet_region[t]] = std::max(hi[m.tet_region[t]], q.max_dihedral);
+  }
+  for (std::size_t b = 0; b < 2; ++b) {
+    EXPECT_EQ(r.report.bodies[b].min_dihedral, lo[b]) << r.report.bodies[b].name;
+    EXPECT_EQ(r.report.bodies[b].max_dihedral, hi[b]) << r.report.bodies[b].name;
+  }
+  EXPECT_EQ(std::min(lo[0], lo[1]), r.report.quality.min_dihedral);
 }
 
 // A slab lying across two blocks touches each on part of its bottom face; the three surfaces
