@@ -566,7 +566,10 @@ MeshCheck check_volume_mesh(const VolumeMesh& mesh, const Domain& domain, const 
   const std::vector<double> fdist = check_boundary_faces(mesh, domain, bnd, bound, options, c);
   {  // independent walks over the boundary faces, on two threads; failures in this order
     MeshCheck fans;
-    run_workers(2, [&](unsigned w) { w == 0 ? check_open_edges(pts, bnd, c) : check_vertex_fans(pts, bnd, fans); });
+    const std::vector<Tri>& faces_out = bnd;  // (clang 14 cannot capture a structured binding)
+    run_workers(2, [&](unsigned w) {
+      w == 0 ? check_open_edges(pts, faces_out, c) : check_vertex_fans(pts, faces_out, fans);
+    });
     c.nonmanifold_vertices = fans.nonmanifold_vertices;
     c.failures.insert(c.failures.end(), fans.failures.begin(), fans.failures.end());
   }
