@@ -11,6 +11,8 @@
 #include <thread>
 #include <vector>
 
+#include "core/cpu_count.h"
+
 namespace kdmesh {
 
 /// Calls job(w) for every w in [0, workers): job(0) on the calling thread and each other on a
@@ -47,12 +49,12 @@ void run_workers(unsigned workers, const Job& job) {
 }
 
 /// Calls body(begin, end, worker) on disjoint chunks covering [0, n), one chunk per worker,
-/// on up to `max_workers` threads (0 = hardware concurrency) through run_workers. Ranges
+/// on up to `max_workers` threads (0 = available_cpus()) through run_workers. Ranges
 /// shorter than `grain` per worker run on the calling thread. The first exception thrown by a
 /// worker is rethrown.
 template <class Body>
 void parallel_for(std::size_t n, Body&& body, std::size_t grain = 4096, unsigned max_workers = 0) {
-  unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  unsigned hw = std::max(1u, available_cpus());
   unsigned workers = max_workers ? std::min(max_workers, hw) : hw;
   workers = unsigned(std::min<std::size_t>(workers, std::max<std::size_t>(1, n / std::max<std::size_t>(grain, 1))));
   if (workers <= 1) {
@@ -67,7 +69,7 @@ void parallel_for(std::size_t n, Body&& body, std::size_t grain = 4096, unsigned
 }
 
 /// Calls body(begin, end, worker) on blocks of `block` indices covering [0, n), each block
-/// taken by whichever of up to `max_workers` threads (0 = hardware concurrency) is free, for
+/// taken by whichever of up to `max_workers` threads (0 = available_cpus()) is free, for
 /// loops whose items differ in cost (one chunk per worker, as parallel_for gives, leaves a core
 /// idle while the other finishes the costly part). Which worker runs a block depends on the
 /// timing, so bodies must give per-index results. The first exception thrown (lowest worker)
@@ -76,7 +78,7 @@ template <class Body>
 void parallel_blocks(std::size_t n, std::size_t block, Body&& body, unsigned max_workers = 0) {
   block = std::max<std::size_t>(1, block);
   const std::size_t blocks = (n + block - 1) / block;
-  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  const unsigned hw = std::max(1u, available_cpus());
   const unsigned workers = unsigned(std::min<std::size_t>(max_workers ? std::min(max_workers, hw) : hw, blocks));
   if (workers <= 1) {
     for (std::size_t k = 0; k < blocks; ++k) body(k * block, std::min(n, (k + 1) * block), 0u);

@@ -2,6 +2,7 @@
 // write nothing.
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -12,6 +13,7 @@
 #include <sstream>
 #include <string>
 
+#include "core/cpu_count.h"
 #include "tests/support/run_cli.h"
 #include "tests/support/tetgen.h"
 
@@ -134,6 +136,30 @@ TEST(Cli, DelaunayOnTwoThreadsChecksAndReportsItsRounds) {
   const CliResult bad = kdmesh("delaunay " + pts.string() + " --kernel cgal --order cgal --threads 2 -q");
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.err.find("--threads applies to --kernel kdmesh"), std::string::npos) << bad.err;
+}
+
+// --threads 0 means one thread per CPU the process may use: bound to one CPU (taskset, as a
+// batch system's cpuset binds a job), the run is sequential, with the same tets. Regression:
+// the count was the machine's (std::thread::hardware_concurrency), whatever the binding.
+TEST(Cli, RegressionDefaultThreadsFollowTheAffinityMask) {
+  cpu_set_t mask;
+  CPU_ZERO(&mask);
+  ASSERT_EQ(sched_getaffinity(0, sizeof mask, &mask), 0);
+  if (kdmesh::available_cpus() < 2) GTEST_SKIP() << "needs two CPUs to tell one from all";
+  int first = 0;
+  while (!CPU_ISSET(first, &mask)) ++first;
+  const fs::path pts = tmpdir() / "cube-affinity.xyz";
+  ASSERT_EQ(kdmesh("points --dist cube -n 100000 --seed 5 -q -o " + pts.string()).code, 0);
+  const CliResult all = kdmesh("delaunay " + pts.string() + " --threads 0 --json -q");
+  const CliResult bound = kdmesh::test::run_kdmesh("delaunay " + pts.string() + " --threads 0 --json -q", tmpdir(),
+                                                   "taskset -c " + std::to_string(first));
+  ASSERT_EQ(all.code, 0) << all.err;
+  ASSERT_EQ(bound.code, 0) << bound.err;
+  const auto ja = nlohmann::json::parse(all.out), jb = nlohmann::json::parse(bound.out);
+  EXPECT_EQ(ja["counts"]["threads"].get<unsigned>(), kdmesh::available_cpus());
+  EXPECT_EQ(jb["counts"]["threads"], 1);
+  EXPECT_EQ(jb["counts"]["parallel_rounds"], 0);
+  EXPECT_EQ(ja["tets"], jb["tets"]);
 }
 
 // --count on a point file (used for Tables 16-17 on the pipeline's node sets): CGAL, given

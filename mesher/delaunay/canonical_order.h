@@ -22,8 +22,9 @@ namespace kdmesh {
 ///    infinite tets come last;
 ///  - exact duplicate points (stats.duplicates): every tet names, of each set of equal points,
 ///    the one of least rank, the one a sequential run keeps; `stats` then says so too.
-/// Face references are remapped accordingly. Runs on up to `threads` threads (0 = all cores);
-/// linear time; 53 bytes of scratch per tet (a copy of the records, keys, the new order).
+/// Face references are remapped accordingly. Runs on up to `threads` threads (0:
+/// available_cpus()); linear time; 53 bytes of scratch per tet (a copy of the records, keys,
+/// the new order).
 void canonicalize_triangulation(Triangulation& tri, const Ordering& order, DelaunayStats& stats,
                                 unsigned threads = 0);
 

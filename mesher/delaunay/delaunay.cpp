@@ -12,6 +12,7 @@
 // each worker inserts the points of its own slab and may touch only the tets whose four
 // vertices lie in that slab (insert_in_rounds below); the result is the same triangulation.
 // SPDX-License-Identifier: AGPL-3.0-or-later
+#include "core/cpu_count.h"
 #include "mesher/delaunay/delaunay.h"
 
 #include <algorithm>
@@ -1047,7 +1048,7 @@ DelaunayResult delaunay(const PointSet& points, const Ordering& order,
     throw UsageError("delaunay: " + std::to_string(options.threads) +
                      " threads requested; at most 256 are supported");
   const unsigned threads =
-      options.threads ? options.threads : std::max(1u, std::min(256u, std::thread::hardware_concurrency()));
+      options.threads ? options.threads : std::max(1u, std::min(256u, available_cpus()));
   st.threads = threads;
   const std::vector<std::uint32_t>& ids = order.order;
   // Unwritten until the gather below, whose threads first touch their pages.

@@ -17,8 +17,9 @@ namespace kdmesh {
 struct DelaunayOptions {
   /// Called now and then with the fraction of points inserted (0..1]; may be empty.
   std::function<void(double)> progress;
-  /// Inserting threads: 1 = sequential, 0 = one per hardware thread. Any count gives the same
-  /// tets (in a different order); runs with the same count are identical, counts included.
+  /// Inserting threads: 1 = sequential, 0 = one per CPU the process may use (available_cpus).
+  /// Any count gives the same tets (in a different order); runs with the same count are
+  /// identical, counts included.
   /// Below ~40k points the kernel runs sequentially whatever this says. At most 256
   /// (UsageError otherwise).
   unsigned threads = 1;

@@ -1,5 +1,6 @@
 // kdmesh — the mutable tet structure of the quality-improvement pass (mesher/improve/improve_tets.h).
 // SPDX-License-Identifier: AGPL-3.0-or-later
+#include "core/cpu_count.h"
 #include "mesher/improve/improve_tets.h"
 #include "mesher/quality/centroid_sides.h"
 
@@ -40,7 +41,7 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
     : nodes_(&nodes) {
   const std::size_t nt = tets.size() / 4, np = nodes.size_count();
   {  // the first reference past the nodes (each worker's first, then the least)
-    std::vector<std::size_t> bad(std::max(1u, std::thread::hardware_concurrency()), tets.size());
+    std::vector<std::size_t> bad(std::max(1u, available_cpus()), tets.size());
     parallel_for(4 * nt, [&](std::size_t b, std::size_t e, unsigned w) {
       for (std::size_t i = b; i < e && bad[w] == tets.size(); ++i)
         if (tets[i] >= np) bad[w] = i;

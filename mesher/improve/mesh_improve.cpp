@@ -1,6 +1,7 @@
 // kdmesh — quality improvement of a volume mesh: the schedule of flips, relaxation and
 // smoothing, and the per-stage measurements (mesher/improve/mesh_improve.h).
 // SPDX-License-Identifier: AGPL-3.0-or-later
+#include "core/cpu_count.h"
 #include "mesher/improve/mesh_improve.h"
 
 #include <algorithm>
@@ -90,7 +91,7 @@ std::vector<std::uint32_t> colour_pass(ImproveTets& m, const std::vector<std::ui
     std::size_t first = 0, last = 0;  // the worker's range of verts
     std::vector<std::uint32_t> nb, stars;
   };
-  std::vector<Lists> lists(std::max(1u, std::thread::hardware_concurrency()));
+  std::vector<Lists> lists(std::max(1u, available_cpus()));
   std::vector<std::size_t, UninitAllocator<std::size_t>> nb_at(n), star_at(n);  // written by the workers
   parallel_for(n, [&](std::size_t b, std::size_t e, unsigned w) {
     std::vector<std::uint32_t> star;
@@ -117,7 +118,7 @@ std::vector<std::uint32_t> colour_pass(ImproveTets& m, const std::vector<std::ui
     }
   }, 1024, threads);
   // Vertex k's worker, and each worker's list ends.
-  std::vector<std::uint16_t> owner(n);  // (hardware_concurrency() is far below 2^16)
+  std::vector<std::uint16_t> owner(n);  // (available_cpus() is far below 2^16)
   for (std::size_t w = 0; w < lists.size(); ++w) {
     const Lists& l = lists[w];
     if (l.first >= l.last) continue;

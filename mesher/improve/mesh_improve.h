@@ -64,7 +64,7 @@ struct ImproveOptions {
   /// 0: unknown, such caps are kept.
   double feature_angle = 0;
   bool measure_stages = true;     ///< quality summary after each stage (costs a pass each)
-  /// Worker threads for the vertex passes and the flips' choices (0 = all cores). The result
+  /// Worker threads for the vertex passes and the flips' choices (0 = available_cpus()). The result
   /// does not depend on it.
   unsigned threads = 0;
   /// Progress: stage name and fraction done.

@@ -18,7 +18,7 @@ namespace kdmesh {
 
 struct VolumeMeshOptions {
   OrderOptions order;                ///< insertion order of the nodes (kd-bfs-hilbert by default)
-  /// Delaunay inserting threads (0 = all cores). The mesh is the same for any count: the
+  /// Delaunay inserting threads (0 = available_cpus()). The mesh is the same for any count: the
   /// triangulation is put in canonical order (mesher/delaunay/canonical_order.h).
   unsigned threads = 0;
   int max_steiner_rounds = 12;       ///< rounds of surface Steiner insertion before giving up

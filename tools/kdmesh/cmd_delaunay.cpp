@@ -30,7 +30,7 @@ struct Options {
   std::string kernel = "kdmesh";
   std::uint64_t seed = 1;
   bool check = false;
-  unsigned threads = 1;  ///< kdmesh kernel: inserting threads (0 = one per hardware thread)
+  unsigned threads = 1;  ///< kdmesh kernel: inserting threads (0 = one per CPU the process may use)
   bool count = false;  ///< CGAL kernel: count predicates (counting traits; slower)
   std::string max_memory;  ///< empty: the machine's memory
   std::string output;
@@ -284,7 +284,7 @@ void add_delaunay_command(CLI::App& app, Runner& run) {
       ->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of the random and brio orders")->capture_default_str();
   cmd->add_option("--threads", o->threads,
-                  "kdmesh kernel: inserting threads (0 = one per hardware thread); the tets are "
+                  "kdmesh kernel: inserting threads (0 = one per CPU the process may use); the tets are "
                   "the same for any count. With 1, the insertion order is built on one thread too")
       ->capture_default_str();
   cmd->add_flag("--check", o->check,
