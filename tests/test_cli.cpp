@@ -146,6 +146,7 @@ TEST(Cli, RegressionDefaultThreadsFollowTheAffinityMask) {
   CPU_ZERO(&mask);
   ASSERT_EQ(sched_getaffinity(0, sizeof mask, &mask), 0);
   if (kdmesh::available_cpus() < 2) GTEST_SKIP() << "needs two CPUs to tell one from all";
+  if (std::system("command -v taskset >/dev/null") != 0) GTEST_SKIP() << "needs taskset (util-linux)";
   int first = 0;
   while (!CPU_ISSET(first, &mask)) ++first;
   const fs::path pts = tmpdir() / "cube-affinity.xyz";

@@ -491,6 +491,8 @@ TEST(CliBatch, CrashedJobIsIsolatedAndLeavesNoTemporaries) {
 // and give the nodes of a run without the limit.
 TEST(CliBatch, RegressionProcessLimitRunsTheJobsFewerAtATime) {
   if (::geteuid() != 0) GTEST_SKIP() << "needs root, to run the batch as another user under RLIMIT_NPROC";
+  if (std::system("command -v prlimit >/dev/null && command -v setpriv >/dev/null") != 0)
+    GTEST_SKIP() << "needs prlimit and setpriv (util-linux)";
   const fs::path yaml = write_three_job_batch();
   const fs::path free_dir = tmpdir() / "batch-nproc-free", dir = tmpdir() / "batch-nproc";
   for (const fs::path& d : {free_dir, dir}) {
