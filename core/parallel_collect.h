@@ -3,7 +3,6 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
-#include <thread>
 #include <vector>
 
 #include "core/cpu_count.h"
@@ -17,7 +16,7 @@ namespace kdmesh {
 template <class Take>
 std::vector<std::uint32_t> parallel_collect(std::size_t n, Take&& take, std::size_t grain = 65536,
                                             unsigned max_workers = 0) {
-  std::vector<std::vector<std::uint32_t>> part(std::max(1u, available_cpus()));
+  std::vector<std::vector<std::uint32_t>> part(available_cpus());
   parallel_for(n, [&](std::size_t b, std::size_t e, unsigned w) {
     for (std::size_t i = b; i < e; ++i)
       if (take(i)) part[w].push_back(std::uint32_t(i));

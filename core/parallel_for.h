@@ -54,7 +54,7 @@ void run_workers(unsigned workers, const Job& job) {
 /// worker is rethrown.
 template <class Body>
 void parallel_for(std::size_t n, Body&& body, std::size_t grain = 4096, unsigned max_workers = 0) {
-  unsigned hw = std::max(1u, available_cpus());
+  const unsigned hw = available_cpus();
   unsigned workers = max_workers ? std::min(max_workers, hw) : hw;
   workers = unsigned(std::min<std::size_t>(workers, std::max<std::size_t>(1, n / std::max<std::size_t>(grain, 1))));
   if (workers <= 1) {
@@ -78,7 +78,7 @@ template <class Body>
 void parallel_blocks(std::size_t n, std::size_t block, Body&& body, unsigned max_workers = 0) {
   block = std::max<std::size_t>(1, block);
   const std::size_t blocks = (n + block - 1) / block;
-  const unsigned hw = std::max(1u, available_cpus());
+  const unsigned hw = available_cpus();
   const unsigned workers = unsigned(std::min<std::size_t>(max_workers ? std::min(max_workers, hw) : hw, blocks));
   if (workers <= 1) {
     for (std::size_t k = 0; k < blocks; ++k) body(k * block, std::min(n, (k + 1) * block), 0u);

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
-#include <thread>
 #include <vector>
 
 #include "core/cpu_count.h"
@@ -24,7 +23,7 @@ template <class BucketOf, class Place>
 std::vector<std::size_t> bucket_scatter(std::size_t n, std::size_t buckets, BucketOf&& bucket_of, Place&& place) {
   if (n >= (std::size_t(1) << 32)) throw UsageError("bucket_scatter: 2^32 items or more");
   const std::size_t parts =
-      std::clamp<std::size_t>(n / (1 << 16), 1, std::max(1u, available_cpus()));
+      std::clamp<std::size_t>(n / (1 << 16), 1, available_cpus());
   auto part_begin = [&](std::size_t p) { return n * p / parts; };
   // at[p * buckets + b]: part p's items in bucket b, then where the next one goes.
   std::vector<std::uint32_t> at(parts * buckets, 0);

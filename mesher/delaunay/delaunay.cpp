@@ -12,7 +12,6 @@
 // each worker inserts the points of its own slab and may touch only the tets whose four
 // vertices lie in that slab (insert_in_rounds below); the result is the same triangulation.
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "core/cpu_count.h"
 #include "mesher/delaunay/delaunay.h"
 
 #include <algorithm>
@@ -24,17 +23,17 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <thread>
 #include <tuple>
 
+#include "core/cpu_count.h"
 #include "core/error.h"
 #include "core/page_warmer.h"
+#include "core/parallel_for.h"
 #include "core/rng.h"
 #include "core/timer.h"
 #include "core/uninit_allocator.h"
 #include "mesher/delaunay/conflict.h"
 #include "mesher/delaunay/predicates.h"
-#include "core/parallel_for.h"
 
 namespace kdmesh {
 

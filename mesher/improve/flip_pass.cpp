@@ -1,6 +1,5 @@
 // kdmesh — the flip stage of the quality-improvement pass (mesher/improve/flip_pass.h).
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "core/cpu_count.h"
 #include "mesher/improve/flip_pass.h"
 
 #include <algorithm>
@@ -9,12 +8,12 @@
 #include <limits>
 #include <memory>
 #include <queue>
-#include <thread>
 #include <tuple>
 #include <unordered_map>
 #include <utility>
 #include <vector>
 
+#include "core/cpu_count.h"
 #include "mesher/improve/flip_parts.h"
 #include "mesher/improve/improve_flips.h"
 #include "mesher/improve/improve_quality.h"
@@ -260,7 +259,7 @@ std::size_t work_parts(ImproveTets& m, SineCache& cache, const std::vector<std::
 std::size_t flip_pass(ImproveTets& m, SineCache& cache, double threshold, int max_ring,
                       FlipCounts& counts, const BoundaryContext* boundary, unsigned threads,
                       const FlipSchedule& schedule) {
-  const unsigned asked = threads ? threads : std::max(1u, available_cpus());
+  const unsigned asked = threads ? threads : available_cpus();
   // A batch is about half a millisecond of work (64 choices of ~9 us on the gear box's
   // housing), near the cost of starting a thread: the threads are started once, not per batch.
   std::unique_ptr<WorkerTeam> team;

@@ -29,8 +29,8 @@ struct FlipSchedule {
   std::size_t part_tets = 32768;
   unsigned max_levels = 5;
   /// Phases of parts at most (at least one runs): each next one splits, likewise, the tets the
-  /// one before left, if enough for a split (the gear box: 2.33M tets below the threshold, 715k left by a first
-  /// phase of 32 parts).
+  /// one before left, if enough for a split (the gear box: 2.33M tets below the threshold,
+  /// 715k left by a first phase of 32 parts).
   unsigned max_phases = 3;
   /// Each part's dead slots for the tets it makes: its tets below the threshold / pool_per,
   /// at least min_pool (a flip the pool cannot hold is left to the serial phase).

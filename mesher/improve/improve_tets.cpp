@@ -1,6 +1,5 @@
 // kdmesh — the mutable tet structure of the quality-improvement pass (mesher/improve/improve_tets.h).
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "core/cpu_count.h"
 #include "mesher/improve/improve_tets.h"
 #include "mesher/quality/centroid_sides.h"
 
@@ -8,13 +7,13 @@
 #include <array>
 #include <atomic>
 #include <string>
-#include <thread>
 
+#include "core/cpu_count.h"
 #include "core/error.h"
-#include "mesher/bucket_scatter.h"
 #include "core/parallel_collect.h"
 #include "core/parallel_for.h"
 #include "core/uninit_allocator.h"
+#include "mesher/bucket_scatter.h"
 #include "mesher/volume/volume_mesh.h"
 
 namespace kdmesh {
@@ -41,7 +40,7 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
     : nodes_(&nodes) {
   const std::size_t nt = tets.size() / 4, np = nodes.size_count();
   {  // the first reference past the nodes (each worker's first, then the least)
-    std::vector<std::size_t> bad(std::max(1u, available_cpus()), tets.size());
+    std::vector<std::size_t> bad(available_cpus(), tets.size());
     parallel_for(4 * nt, [&](std::size_t b, std::size_t e, unsigned w) {
       for (std::size_t i = b; i < e && bad[w] == tets.size(); ++i)
         if (tets[i] >= np) bad[w] = i;

@@ -1,7 +1,6 @@
 // kdmesh — quality improvement of a volume mesh: the schedule of flips, relaxation and
 // smoothing, and the per-stage measurements (mesher/improve/mesh_improve.h).
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "core/cpu_count.h"
 #include "mesher/improve/mesh_improve.h"
 
 #include <algorithm>
@@ -9,23 +8,23 @@
 #include <cmath>
 #include <limits>
 #include <queue>
-#include <thread>
 #include <tuple>
 
+#include "core/cpu_count.h"
 #include "core/error.h"
+#include "core/parallel_for.h"
 #include "core/timer.h"
-#include "mesher/improve/improve_caps.h"
+#include "core/uninit_allocator.h"
 #include "mesher/improve/flip_pass.h"
+#include "mesher/improve/improve_caps.h"
 #include "mesher/improve/improve_flips.h"
 #include "mesher/improve/improve_insert.h"
-#include "mesher/improve/improve_split.h"
-#include "mesher/improve/improve_split_boundary.h"
 #include "mesher/improve/improve_quality.h"
 #include "mesher/improve/improve_smooth.h"
+#include "mesher/improve/improve_split.h"
+#include "mesher/improve/improve_split_boundary.h"
 #include "mesher/improve/improve_tets.h"
 #include "mesher/improve/sine_cache.h"
-#include "core/parallel_for.h"
-#include "core/uninit_allocator.h"
 #include "mesher/tet_quality.h"
 
 namespace kdmesh {
@@ -91,7 +90,7 @@ std::vector<std::uint32_t> colour_pass(ImproveTets& m, const std::vector<std::ui
     std::size_t first = 0, last = 0;  // the worker's range of verts
     std::vector<std::uint32_t> nb, stars;
   };
-  std::vector<Lists> lists(std::max(1u, available_cpus()));
+  std::vector<Lists> lists(available_cpus());
   std::vector<std::size_t, UninitAllocator<std::size_t>> nb_at(n), star_at(n);  // written by the workers
   parallel_for(n, [&](std::size_t b, std::size_t e, unsigned w) {
     std::vector<std::uint32_t> star;
