@@ -498,6 +498,54 @@ TEST(SpacingGrid, ConflictsEqualBruteForceOnAGradedField) {
     }
 }
 
+// Cells beyond the hash table's range (2^19 per axis and level) share the edge cells' keys:
+// nodes and queries up to 2^22 cells beyond the corner, and below it (negative cell indices,
+// where the index's floor by truncation must round down), still get brute force's answers.
+// The graded-field test above never leaves the table's range.
+TEST(SpacingGrid, CellsBeyondTheTableRangeStillFindEveryConflict) {
+  const double lo[3] = {0, 0, 0};
+  const double h = 1;
+  SpacingGrid grid(lo, h);  // cells 4 across: the table's range ends near 2^21
+  std::vector<std::array<double, 3>> stored;
+  Rng rng(5);
+  auto random_point = [&](double* x) {
+    for (int k = 0; k < 3; ++k) {
+      // Spread along x over [-2^23, 2^24], near the other two axes' table edges.
+      x[k] = k == 0 ? rng.uniform(-8388608.0, 16777216.0) : rng.uniform(-3.0, 3.0) + (k == 1 ? 2097152.0 : -2.0);
+    }
+  };
+  auto brute = [&](const double* p, double beta) {
+    for (const auto& n : stored) {
+      const double dx = n[0] - p[0], dy = n[1] - p[1], dz = n[2] - p[2];
+      const double lim = beta * (h + h) / 2;
+      if (dx * dx + dy * dy + dz * dz < lim * lim) return true;
+    }
+    return false;
+  };
+  for (int i = 0; i < 3000; ++i) {
+    double x[3];
+    random_point(x);
+    if (i % 2) x[0] = stored.empty() ? x[0] : stored.back()[0] + rng.uniform(-1.5, 1.5);  // near pairs
+    if (brute(x, 0.5)) continue;
+    grid.insert(x, h);
+    stored.push_back({x[0], x[1], x[2]});
+  }
+  int hits = 0;
+  for (int i = 0; i < 3000; ++i) {
+    double p[3];
+    random_point(p);
+    if (i % 2) {
+      const auto& n = stored[std::size_t(i) % stored.size()];
+      for (int k = 0; k < 3; ++k) p[k] = n[k] + rng.uniform(-1.2, 1.2);
+    }
+    const bool expected = brute(p, 1.0);
+    ASSERT_EQ(grid.conflicts(p, h, 1.0), expected) << "query " << i;
+    hits += expected;
+  }
+  EXPECT_GT(hits, 300);
+  EXPECT_LT(hits, 2700);
+}
+
 // Issue 19: the surface sweep split a facet into 4 similar pieces down to the local size, so
 // a long thin facet cost (length / h)^2: a 64-sided cylinder 100 long at size 0.3 spent 6
 // minutes placing nodes and 2 s meshing them. The sweep now cuts a thin piece across into
