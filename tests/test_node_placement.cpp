@@ -318,6 +318,53 @@ TEST(InteriorFill, LatticeIsTurnedOffTheAxesAndExact) {
   EXPECT_NEAR(least_angle_to_axis_planes(aligned.neighbour_vectors), 35.26, 0.01);
 }
 
+// The lattice's candidates are every lattice point inside the box and clear of its faces:
+// brute force over a range of U wider than the box. Each block enumerates only the U whose
+// image box over the block's corners holds them (the range of i rounded inwards; rounded
+// outwards, the gear box tried 792M points for 23M in their blocks); a range cut too
+// far would lose points at the blocks' borders, which the octree puts all through the box.
+TEST(InteriorFill, CandidatesAreEveryLatticePointInsideAndClear) {
+  const Model m = box(1, 1.3, 0.7);
+  const SurfaceQuery q(m.surface.mesh);
+  for (const double h : {0.1, 0.043}) {
+    const SizingField field = uniform(m, h);
+    for (const bool rotate : {true, false}) {
+      InteriorFillOptions o;
+      o.rotate_lattice = rotate;
+      o.layer_tries = 0;
+      const double glo[3] = {-1, -1, -1};
+      SpacingGrid grid(glo, h / 4);
+      NodeSet ns;
+      const InteriorFillStats st =
+          fill_interior(m.surface.mesh, m.surface.bbox_min, m.surface.bbox_max, q, field, o, grid, ns);
+      // The lattice of level 0 (h is uniform): q M U, U all even or all odd (the test above).
+      const std::int64_t kM[3][3] = {{6, 3, 2}, {2, -6, 3}, {3, -2, -6}};
+      const std::int64_t kI[3][3] = {{7, 0, 0}, {0, 7, 0}, {0, 0, 7}};
+      const std::int64_t(&M)[3][3] = rotate ? kM : kI;
+      int e = 0;
+      const double mantissa = std::frexp(o.kappa * h / 14, &e);
+      const double qs = std::ldexp(std::nearbyint(std::ldexp(mantissa, 16)), e - 16);
+      const double hi[3] = {1, 1.3, 0.7};
+      const std::int64_t r = std::int64_t(1.8 / qs / 7) + 4;  // |U_i| <= |M^T p| / (49 q) = |p| / (7 q), |p| < 1.78
+      std::size_t expected = 0;
+      for (std::int64_t a = -r; a <= r; ++a)
+        for (std::int64_t b = -r; b <= r; ++b)
+          for (std::int64_t c = -r; c <= r; ++c) {
+            if ((a & 1) != (b & 1) || (a & 1) != (c & 1)) continue;
+            double p[3];
+            bool in = true;
+            for (int ax = 0; ax < 3 && in; ++ax) {
+              p[ax] = qs * double(M[ax][0] * a + M[ax][1] * b + M[ax][2] * c);
+              in = p[ax] > 0 && p[ax] < hi[ax];
+            }
+            if (in && q.distance(p) >= o.clearance * h) ++expected;
+          }
+      EXPECT_GT(expected, 500u) << "h " << h;
+      EXPECT_EQ(st.candidates, expected) << "h " << h << " rotate " << rotate;
+    }
+  }
+}
+
 // ---- corners and feature edges ----
 
 TEST(NodePlacement, BoxCornersArePresentAsCornerNodes) {
