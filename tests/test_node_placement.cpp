@@ -318,49 +318,71 @@ TEST(InteriorFill, LatticeIsTurnedOffTheAxesAndExact) {
   EXPECT_NEAR(least_angle_to_axis_planes(aligned.neighbour_vectors), 35.26, 0.01);
 }
 
-// The lattice's candidates are every lattice point inside the box and clear of its faces:
-// brute force over a range of U wider than the box. Each block enumerates only the U whose
-// image box over the block's corners holds them (the range of i rounded inwards; rounded
-// outwards, the gear box tried 792M points for 23M in their blocks); a range cut too
-// far would lose points at the blocks' borders, which the octree puts all through the box.
-TEST(InteriorFill, CandidatesAreEveryLatticePointInsideAndClear) {
+// The lattice's candidates are every lattice point inside the box and clear of its faces, of
+// its own level: brute force over a range of U wider than the box, level by level, with the
+// level rule of InteriorFillOptions::rho (round(log_rho(h_max / h(p))), clamped). Each block
+// enumerates only the U whose image box over the block's corners holds them (the range of i
+// rounded inwards; rounded outwards, the gear box tried 792M points for 23M in their blocks),
+// and takes a size inside its level's range narrowed by 1e-9 as that level without the
+// logarithm. A range cut too far would lose points at the blocks' borders, which the octree
+// puts all through the box; a wrong level range would move points between levels.
+TEST(InteriorFill, CandidatesAreEveryLatticePointOfItsLevelInsideAndClear) {
   const Model m = box(1, 1.3, 0.7);
   const SurfaceQuery q(m.surface.mesh);
-  for (const double h : {0.1, 0.043}) {
-    const SizingField field = uniform(m, h);
+  const SizingField fields[3] = {uniform(m, 0.1), uniform(m, 0.043),
+                                 point_zone_field(m.surface.mesh, 0.12, 0.035, {0.3, 0.7, 0.2})};
+  const double smallest[3] = {0.1, 0.043, 0.035};  // the least size each field takes
+  for (const SizingField& field : fields) {
+    const std::size_t f = std::size_t(&field - fields);
     for (const bool rotate : {true, false}) {
       InteriorFillOptions o;
       o.rotate_lattice = rotate;
       o.layer_tries = 0;
       const double glo[3] = {-1, -1, -1};
-      SpacingGrid grid(glo, h / 4);
+      SpacingGrid grid(glo, field.min_size() / 4);
+      grid.set_lipschitz(field.options().gradation);
       NodeSet ns;
       const InteriorFillStats st =
           fill_interior(m.surface.mesh, m.surface.bbox_min, m.surface.bbox_max, q, field, o, grid, ns);
-      // The lattice of level 0 (h is uniform): q M U, U all even or all odd (the test above).
+      const double hmax = field.max_size(), hmin = std::min(field.min_size(), hmax);
+      const int max_level = int(std::lround(std::log(hmax / hmin) / std::log(o.rho))) + 1;
+      auto level_of = [&](double h) {
+        return std::clamp(int(std::lround(std::log(hmax / h) / std::log(o.rho))), 0, max_level);
+      };
+      // Level k's lattice: q M U, U all even or all odd, q = kappa h_max rho^-k / 14 rounded to
+      // 16 bits (the test above).
       const std::int64_t kM[3][3] = {{6, 3, 2}, {2, -6, 3}, {3, -2, -6}};
       const std::int64_t kI[3][3] = {{7, 0, 0}, {0, 7, 0}, {0, 0, 7}};
       const std::int64_t(&M)[3][3] = rotate ? kM : kI;
-      int e = 0;
-      const double mantissa = std::frexp(o.kappa * h / 14, &e);
-      const double qs = std::ldexp(std::nearbyint(std::ldexp(mantissa, 16)), e - 16);
       const double hi[3] = {1, 1.3, 0.7};
-      const std::int64_t r = std::int64_t(1.8 / qs / 7) + 4;  // |U_i| <= |M^T p| / (49 q) = |p| / (7 q), |p| < 1.78
       std::size_t expected = 0;
-      for (std::int64_t a = -r; a <= r; ++a)
-        for (std::int64_t b = -r; b <= r; ++b)
-          for (std::int64_t c = -r; c <= r; ++c) {
-            if ((a & 1) != (b & 1) || (a & 1) != (c & 1)) continue;
-            double p[3];
-            bool in = true;
-            for (int ax = 0; ax < 3 && in; ++ax) {
-              p[ax] = qs * double(M[ax][0] * a + M[ax][1] * b + M[ax][2] * c);
-              in = p[ax] > 0 && p[ax] < hi[ax];
+      std::set<int> levels;
+      // (Levels of sizes the field never takes have no points: min_size() is a lower bound.)
+      for (int k = level_of(hmax); k <= level_of(smallest[f]); ++k) {
+        int e = 0;
+        const double mantissa = std::frexp(o.kappa * hmax * std::pow(o.rho, -double(k)) / 14, &e);
+        const double qs = std::ldexp(std::nearbyint(std::ldexp(mantissa, 16)), e - 16);
+        const std::int64_t r = std::int64_t(1.8 / qs / 7) + 4;  // |U_i| <= |p| / (7 q), |p| < 1.78
+        for (std::int64_t a = -r; a <= r; ++a)
+          for (std::int64_t b = -r; b <= r; ++b)
+            for (std::int64_t c = -r; c <= r; ++c) {
+              if ((a & 1) != (b & 1) || (a & 1) != (c & 1)) continue;
+              double p[3];
+              bool in = true;
+              for (int ax = 0; ax < 3 && in; ++ax) {
+                p[ax] = qs * double(M[ax][0] * a + M[ax][1] * b + M[ax][2] * c);
+                in = p[ax] > 0 && p[ax] < hi[ax];
+              }
+              if (!in) continue;
+              const double h = field(p);
+              if (level_of(h) == k && q.distance(p) >= o.clearance * h) ++expected, levels.insert(k);
             }
-            if (in && q.distance(p) >= o.clearance * h) ++expected;
-          }
-      EXPECT_GT(expected, 500u) << "h " << h;
-      EXPECT_EQ(st.candidates, expected) << "h " << h << " rotate " << rotate;
+      }
+      EXPECT_GT(expected, 500u) << "field " << f;
+      if (f == 2) {
+        EXPECT_GE(levels.size(), 3u);  // the graded field's points: 3 levels or more
+      }
+      EXPECT_EQ(st.candidates, expected) << "field " << f << " rotate " << rotate;
     }
   }
 }
