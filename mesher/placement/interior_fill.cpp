@@ -157,12 +157,13 @@ struct Filler {
     // levels). A point whose h is known to be beyond them (h is lip-Lipschitz, h(c) = hc) is
     // not evaluated: on the paper gear box 76 % of the points in their blocks had another
     // level, each costing a field evaluation.
-    const double h_above = k > 0 ? hmax * std::pow(opt.rho, 0.5 - k) * (1 + 1e-9) : INFINITY;
-    const double h_below = k < max_level ? hmax * std::pow(opt.rho, -0.5 - k) * (1 - 1e-9) : 0.0;
+    const double top = hmax * std::pow(opt.rho, 0.5 - k), bottom = hmax * std::pow(opt.rho, -0.5 - k);
+    const double h_above = k > 0 ? top * (1 + 1e-9) : INFINITY;
+    const double h_below = k < max_level ? bottom * (1 - 1e-9) : 0.0;
     // Sizes certainly of level k, narrowed by the same margin (the logarithm's rounding is
     // ~1e-14 of a level, the margin ~1e-9): most points need no logarithm (22.8M on the gear box).
-    const double in_hi = k > 0 ? hmax * std::pow(opt.rho, 0.5 - k) * (1 - 1e-9) : INFINITY;
-    const double in_lo = k < max_level ? hmax * std::pow(opt.rho, -0.5 - k) * (1 + 1e-9) : 0.0;
+    const double in_hi = k > 0 ? top * (1 - 1e-9) : INFINITY;
+    const double in_lo = k < max_level ? bottom * (1 + 1e-9) : 0.0;
     const std::int64_t(&M)[3][3] = opt.rotate_lattice ? kLatticeAxes : kAxisAligned;
     int e = 0;
     const double mantissa = std::frexp(a / 14, &e);  // (sets e before it is read below)
