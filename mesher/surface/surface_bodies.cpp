@@ -219,8 +219,41 @@ void mark_interface(Touching& t, std::uint32_t a, std::uint32_t b, const std::ve
   }
 }
 
+/// Vertex counts of a mesh: those it has (removed ones included: indices) and removed.
+struct VertexMark {
+  Mesh::size_type count = 0, removed = 0;
+};
+VertexMark mark_of(const Mesh& m) { return {m.num_vertices(), m.number_of_removed_vertices()}; }
+
+/// Whether mesh m, since `since`, has a vertex on the closed surface `other` (exact), or lost
+/// one (then, conservatively, true). Corefinement only subdivides: it adds vertices and never
+/// moves the surfaces. Two meshes imprinted with each other conform along their contact, and
+/// stay so while the imprints of third bodies add no vertex on it (a vertex off `other` comes
+/// with edges inside faces that meet `other` at most along edges kept whole), so imprinting
+/// the two again would change nothing.
+bool added_on(const Mesh& m, VertexMark since, const Mesh& other) {
+  if (m.number_of_removed_vertices() != since.removed) return true;
+  std::vector<Box> added;
+  for (Mesh::size_type i = since.count; i < m.num_vertices(); ++i)
+    added.emplace_back(m.point(Mesh::Vertex_index(i)).bbox(), std::uint32_t(i));
+  if (added.empty()) return false;
+  const std::vector<std::array<EK::Point_3, 3>> tri = triangles(other);
+  std::vector<Box> faces;
+  faces.reserve(tri.size());
+  for (std::uint32_t f = 0; f < tri.size(); ++f)
+    faces.emplace_back(tri[f][0].bbox() + tri[f][1].bbox() + tri[f][2].bbox(), f);
+  bool on = false;
+  // Closed boxes (the default), each around its exact point or triangle: every vertex on a
+  // triangle meets its box, and is then tested exactly.
+  CGAL::box_intersection_d(added.begin(), added.end(), faces.begin(), faces.end(), [&](const Box& x, const Box& y) {
+    const auto& t = tri[y.info()];
+    on = on || EK::Triangle_3(t[0], t[1], t[2]).has_on(m.point(Mesh::Vertex_index(x.info())));
+  });
+  return on;
+}
+
 /// Bodies that touch: each pair in contact is imprinted with the other (CGAL PMP corefinement),
-/// until nothing changes; facets of one on the other's surface are the interface between the
+/// and again while the imprint of a third body adds a vertex on its contact; facets of one on the other's surface are the interface between the
 /// two (kept once, from the body with the lower id); the others make the outer surface of the
 /// union. A facet of one inside the other's material is an overlap (BodyContactError), and so
 /// is a contact without a shared face (along an edge or at a point only).
@@ -230,19 +263,34 @@ PreparedSurface join_touching(std::vector<PreparedSurface> parts, const std::vec
   const std::uint32_t nb = std::uint32_t(parts.size());
   Touching t;
   for (const PreparedSurface& p : parts) t.mesh.push_back(to_cgal(p.mesh));
+  // Each pass imprints the pairs that may not conform: all at first, then those whose bodies
+  // gained a vertex on their contact since (added_on). Imprinting a pair that conforms changes
+  // nothing, but is not free: on the paper gear box the first pass took 0.14 s and a second
+  // one over all five pairs, which changed nothing, 1.18 s (exact arithmetic on coincident
+  // faces).
+  std::vector<char> due(pairs.size(), 1);
+  std::size_t imprints = 0;
+  std::vector<std::pair<VertexMark, VertexMark>> after(pairs.size());  // each pair's last imprint
   for (int pass = 0;; ++pass) {
-    bool changed = false;
-    for (const auto& [a, b, at] : pairs) {
-      const std::size_t before = t.mesh[a].number_of_faces() + t.mesh[b].number_of_faces();
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      if (!due[k]) continue;
+      const auto& [a, b, at] = pairs[k];
       try {
         PMP::corefine(t.mesh[a], t.mesh[b]);
       } catch (const std::exception& e) {
         throw GeometryError("bodies '" + names[a] + "' and '" + names[b] + "': imprinting their contact failed (" +
                             e.what() + ")");
       }
-      changed = changed || t.mesh[a].number_of_faces() + t.mesh[b].number_of_faces() != before;
+      after[k] = {mark_of(t.mesh[a]), mark_of(t.mesh[b])};
+      ++imprints;
     }
-    if (!changed) break;
+    bool any = false;
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      const auto& [a, b, at] = pairs[k];
+      due[k] = added_on(t.mesh[a], after[k].first, t.mesh[b]) || added_on(t.mesh[b], after[k].second, t.mesh[a]);
+      any = any || due[k];
+    }
+    if (!any) break;
     if (pass == 8) throw GeometryError("imprinting the touching bodies did not settle after 8 passes");
   }
   for (const Mesh& m : t.mesh) {
@@ -299,6 +347,7 @@ PreparedSurface join_touching(std::vector<PreparedSurface> parts, const std::vec
   // The outer surface and the interfaces, points welded by exact coordinates.
   SurfaceMesh outer;
   BodyInterfaces ifc;
+  ifc.imprints = imprints;
   std::vector<std::uint32_t> outer_body;  // per outer facet
   std::map<std::array<double, 3>, std::uint32_t> outer_id, ifc_id;
   auto id_of = [](std::map<std::array<double, 3>, std::uint32_t>& ids, PointSet& pts, const EK::Point_3& p) {

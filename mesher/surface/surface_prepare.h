@@ -22,6 +22,9 @@ struct BodyInterfaces {
   std::vector<std::array<std::uint32_t, 2>> bodies;  ///< per facet: the body behind, the body in front
   /// Each body's own closed, outward surface (as prepared, scaled): which body holds a point.
   std::vector<SurfaceMesh> body_surfaces;
+  /// Imprints made (CGAL corefinements of a pair of bodies): each pair in contact once, and
+  /// again while an imprint of a third body adds a vertex on its contact.
+  std::size_t imprints = 0;
   bool empty() const { return mesh.num_tris() == 0; }
 };
 
