@@ -18,9 +18,10 @@ namespace kdmesh {
 ///                  file's directory; must exist
 ///     bodies       instead of input: a non-empty list of {name, input}, several solids meshed
 ///                  together, region k = body k (name: [A-Za-z0-9_-]+, distinct; it names the
-///                  region's volume group in the solver formats; input as above). Bodies must lie
-///                  apart (or one in another's void): touching or overlapping ones are refused,
-///                  naming both and a point
+///                  region's volume group in the solver formats; input as above). Bodies may lie
+///                  apart, one in another's void, or touch on faces (imprinted on each other:
+///                  one conforming interface); overlapping ones, and ones that meet only along an
+///                  edge or at a point, are refused, naming both and a point
 ///     scale        optional number > 0 (default 1)
 ///     size         required number > 0: h_max
 ///     min_size     optional number > 0, <= size (default size / 1000)
