@@ -253,10 +253,11 @@ bool added_on(const Mesh& m, VertexMark since, const Mesh& other) {
 }
 
 /// Bodies that touch: each pair in contact is imprinted with the other (CGAL PMP corefinement),
-/// and again while the imprint of a third body adds a vertex on its contact; facets of one on the other's surface are the interface between the
-/// two (kept once, from the body with the lower id); the others make the outer surface of the
-/// union. A facet of one inside the other's material is an overlap (BodyContactError), and so
-/// is a contact without a shared face (along an edge or at a point only).
+/// and again while the imprint of a third body adds a vertex on its contact; facets of one on
+/// the other's surface are the interface between the two (kept once, from the body with the
+/// lower id); the others make the outer surface of the union. A facet of one inside the
+/// other's material is an overlap (BodyContactError), and so is a contact without a shared face
+/// (along an edge or at a point only).
 PreparedSurface join_touching(std::vector<PreparedSurface> parts, const std::vector<std::string>& names,
                               const std::vector<std::string>& inputs,
                               const std::vector<Contact>& pairs, const std::vector<SurfaceQuery*>& query) {
