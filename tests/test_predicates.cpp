@@ -10,6 +10,7 @@
 
 #include "core/rng.h"
 #include "mesher/delaunay/predicates.h"
+#include "mesher/delaunay/wide_int.h"
 
 namespace kdmesh {
 namespace {
@@ -244,6 +245,60 @@ TEST(Predicates, ExactIntegerStageAgreesWithGmpOnLatticeTies) {
   EXPECT_GT(fast, 7900);  // nearby lattice points: the fast path applies to (nearly) all
   EXPECT_GT(orient_ties, 100);
   EXPECT_GT(insphere_ties, 100);
+}
+
+// The exact stage's fixed-width products (mesher/delaunay/wide_int.h), multiplied without a
+// branch on the signs: every sign combination and magnitudes up to the widths' limits, against
+// GMP. A wrong two's complement correction would show in the top limbs.
+template <int N>
+void to_mpz(mpz_t out, const pred::wide::Int<N>& a) {
+  mpz_import(out, N, -1, sizeof(std::uint64_t), 0, 0, a.w);  // least significant limb first
+  if (a.w[N - 1] >> 63) {  // two's complement: the pattern is a + 2^(64 N)
+    mpz_t m;
+    mpz_init_set_ui(m, 1);
+    mpz_mul_2exp(m, m, 64 * N);
+    mpz_sub(out, out, m);
+    mpz_clear(m);
+  }
+}
+
+/// A random value of N limbs below 2^(64 N - 2 - spare) in magnitude, of either sign.
+template <int N>
+pred::wide::Int<N> random_wide(Rng& rng, int spare) {
+  pred::wide::Int<N> a;
+  for (int i = 0; i < N; ++i) a.w[i] = rng.next();
+  a.w[N - 1] >>= 2 + spare;
+  return rng.below(2) ? pred::wide::neg(a) : a;
+}
+
+template <int A, int B>
+void check_products(Rng& rng, int iterations) {
+  mpz_t x, y, want, got;
+  mpz_inits(x, y, want, got, nullptr);
+  for (int iter = 0; iter < iterations; ++iter) {
+    // |a b| < 2^(64(A+B) - 4): inside the product's width, as the predicates' bounds keep it.
+    const pred::wide::Int<A> a = random_wide<A>(rng, iter % 7);
+    const pred::wide::Int<B> b = random_wide<B>(rng, 0);
+    to_mpz(x, a);
+    to_mpz(y, b);
+    mpz_mul(want, x, y);
+    to_mpz(got, pred::wide::mul(a, b));
+    ASSERT_EQ(mpz_cmp(want, got), 0) << "A " << A << " B " << B << " iter " << iter;
+  }
+  mpz_clears(x, y, want, got, nullptr);
+}
+
+TEST(Predicates, WideProductsOfEverySignMatchGmp) {
+  Rng rng(3);
+  check_products<1, 1>(rng, 4000);
+  check_products<1, 2>(rng, 4000);
+  check_products<2, 3>(rng, 4000);
+  // Zero and -1 (all ones) as either factor.
+  const pred::wide::Int<2> minus_one{{~std::uint64_t(0), ~std::uint64_t(0)}}, zero{{0, 0}};
+  const pred::wide::Int<3> m = random_wide<3>(rng, 0);
+  EXPECT_EQ(pred::wide::sign(pred::wide::mul(zero, m)), 0);
+  const pred::wide::Int<5> p = pred::wide::mul(minus_one, m), q = pred::wide::neg(pred::wide::mul(pred::wide::Int<2>{{1, 0}}, m));
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(p.w[i], q.w[i]) << i;
 }
 
 // The fast path's widths are sized for differences below 2^62 of their common scale: inputs at

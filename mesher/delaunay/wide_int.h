@@ -55,23 +55,37 @@ template <int N>
   return add(a, neg(b));
 }
 
-/// The full product, A + B limbs (exact: |a b| <= 2^(64(A+B) - 2) always holds).
+/// The full product, A + B limbs (exact: |a b| <= 2^(64(A+B) - 2) always holds). Without a
+/// branch on the signs (they are coin tosses in the predicates' exact stage): the product of
+/// the two's complement patterns read as unsigned, then, mod 2^(64(A+B)), b 2^(64A) taken off
+/// where a is negative (its pattern is a + 2^(64A)) and a 2^(64B) where b is.
 template <int A, int B>
 [[gnu::always_inline]] inline Int<A + B> mul(const Int<A>& a, const Int<B>& b) {
-  const bool na = negative(a), nb = negative(b);
-  const Int<A> ua = na ? neg(a) : a;
-  const Int<B> ub = nb ? neg(b) : b;
   Int<A + B> r{};
   for (int i = 0; i < A; ++i) {
     std::uint64_t carry = 0;
     for (int j = 0; j < B; ++j) {
-      const u128 t = u128(ua.w[i]) * ub.w[j] + r.w[i + j] + carry;
+      const u128 t = u128(a.w[i]) * b.w[j] + r.w[i + j] + carry;
       r.w[i + j] = std::uint64_t(t);
       carry = std::uint64_t(t >> 64);
     }
     r.w[i + B] = carry;
   }
-  return na != nb ? neg(r) : r;
+  const std::uint64_t a_neg = std::uint64_t(0) - (a.w[A - 1] >> 63);  // all ones if a < 0
+  const std::uint64_t b_neg = std::uint64_t(0) - (b.w[B - 1] >> 63);
+  std::uint64_t borrow = 0;
+  for (int j = 0; j < B; ++j) {
+    const u128 d = u128(r.w[A + j]) - (b.w[j] & a_neg) - borrow;
+    r.w[A + j] = std::uint64_t(d);
+    borrow = std::uint64_t(d >> 64) & 1;
+  }
+  borrow = 0;
+  for (int i = 0; i < A; ++i) {
+    const u128 d = u128(r.w[B + i]) - (a.w[i] & b_neg) - borrow;
+    r.w[B + i] = std::uint64_t(d);
+    borrow = std::uint64_t(d >> 64) & 1;
+  }
+  return r;
 }
 
 template <int N>
