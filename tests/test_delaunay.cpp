@@ -102,6 +102,25 @@ TEST(Delaunay, IntegerLatticeIsValidOrderIndependentAndMatchesCgal) {
   EXPECT_NEAR(total_volume(pts, tg.tets), 729.0, 1e-9);
 }
 
+// Regression: a full lattice is centrally symmetric, and reversing the perturbation's priority
+// (lexicographically smallest point first) gives the mirror image of its triangulation, which
+// the test above cannot tell from CGAL's. A random subset of a lattice has no such symmetry:
+// its ties are broken as CGAL breaks them only with CGAL's priority. (The tie-break's priority
+// order came to be chosen point by point, not by a sort.)
+TEST(Delaunay, RegressionRandomLatticeSubsetMatchesCgalTieBreaks) {
+  const PointSet full = lattice(9);
+  Rng rng(7);
+  PointSet pts;
+  for (std::size_t i = 0; i < full.size(); ++i)
+    if (rng.below(5) < 3) pts.push_back(full.p(i)[0], full.p(i)[1], full.p(i)[2]);
+  const auto kd = run(pts, OrderKind::kd_bfs);
+  expect_valid(pts, kd, "lattice subset");
+  EXPECT_GT(kd.stats.exact_fallbacks, 0u);
+  const auto tets = canonical_tets(pts, kd.tri);
+  EXPECT_TRUE(compare_tets(pts, tets, canonical_tets(pts, run(pts, OrderKind::random).tri)).same_set());
+  EXPECT_TRUE(compare_tets(pts, tets, cgal_delaunay(pts, nullptr).tets).same_set());
+}
+
 // The fill pairs new faces through an edge table that is reused across insertions (entries of
 // older insertions are told apart by a generation tag, cleared every 31 insertions). Here one
 // insertion's cavity is far larger than all before it (the centre of a sphere of points:

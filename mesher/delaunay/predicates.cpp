@@ -329,10 +329,15 @@ bool collinear(const double* a, const double* b, const double* c) {
 
 namespace {
 
-/// Sorts point pointers by decreasing perturbation priority (lexicographically largest first).
+/// Moves the point of highest perturbation priority (lexicographically largest) among
+/// p[k..N) to p[k]: called for k = 0, 1, ... it visits the points in decreasing priority, the
+/// order of a sort, but the tie-breaks mostly stop at the first or second point, and a sort of
+/// all of them took most of insphere_tiebreak's time (its comparisons are coin tosses).
 template <int N>
-void sort_by_priority(const double* (&p)[N]) {
-  std::sort(p, p + N, [](const double* x, const double* y) { return lex_less(y, x); });
+const double* next_by_priority(const double* (&p)[N], int k) {
+  for (int j = k + 1; j < N; ++j)
+    if (lex_less(p[k], p[j])) std::swap(p[k], p[j]);
+  return p[k];
 }
 
 }  // namespace
@@ -343,8 +348,8 @@ int insphere_tiebreak(const double* a, const double* b, const double* c, const d
   // lexicographically largest point getting the dominant term. The coefficient of point X's
   // term is (up to sign) the orientation of the other four with e in X's place.
   const double* p[5] = {a, b, c, d, e};
-  sort_by_priority(p);
-  for (const double* x : p) {
+  for (int k = 0; k < 5; ++k) {
+    const double* x = next_by_priority(p, k);
     if (x == e) return -1;  // (a,b,c,d) positively oriented: e's own term says "outside"
     int o = 0;
     if (x == d) o = orient3d(a, b, c, e);
@@ -365,8 +370,8 @@ int incircle_coplanar_perturbed(const double* a, const double* b, const double* 
   const int s = side > 0 ? insphere(a, b, c, q, e) : insphere(b, a, c, q, e);
   if (s != 0) return s;
   const double* p[4] = {a, b, c, e};
-  sort_by_priority(p);
-  for (const double* x : p) {
+  for (int k = 0; k < 4; ++k) {
+    const double* x = next_by_priority(p, k);
     if (x == e) return -1;
     int o = 0;
     if (x == c) o = orient3d(a, b, e, q);
