@@ -60,6 +60,16 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
         return std::min(std::min(tets[4 * t], tets[4 * t + 1]), std::min(tets[4 * t + 2], tets[4 * t + 3]));
       },
       [&](std::size_t t, std::size_t at) { order[at] = std::uint32_t(t); });
+  // Room for the slots the flip stage's pools add (take_slots, only with 64k tets or more
+  // below its threshold; the paper gear box's 24.5M grew by 102k): growing an array past its
+  // capacity doubled it and copied it, ~1 GB into fresh pages for all five on the gear box,
+  // both copies resident at once. Pages of the room stay unresident until used.
+  const std::size_t room = nt + nt / 32;
+  tv_.reserve(4 * room);
+  ta_.reserve(4 * room);
+  region_.reserve(room);
+  version_.reserve(room);
+  inside_known_.reserve(room);
   tv_.resize(4 * nt);
   ta_.resize(4 * nt);
   region_.resize(nt);
