@@ -517,6 +517,12 @@ InteriorFillStats InteriorLattice::finish(const SurfaceMesh& surface, SpacingGri
   // result equals testing everything against one grid, at a fraction of the cost.
   SpacingGrid others(grid.lo(), grid.s0());
   others.set_lipschitz(I.sizing.options().gradation);
+  // Room for every candidate, and in `grid` for the boundary layer too (at most one node a
+  // surface node here; the paper gear box: 3.56M of 4.32M candidates kept, 124k layer nodes for
+  // 539k surface nodes). Growing by doubling copied the 40-byte records into fresh pages,
+  // 450 MB on the gear box, with the other core idle. Unused room is never touched.
+  others.reserve(total);
+  grid.reserve(grid.size() + total + surface_nodes);
   // Within a level the tests are independent (both grids are only read), so they run on
   // `threads` threads; the accepted candidates keep their order.
   std::vector<const Candidate*> accepted;

@@ -35,6 +35,9 @@ class SpacingGrid {
   /// True if some stored node q conflicts with (p, h) for this beta (see above).
   bool conflicts(const double* p, double h, double beta) const;
   std::size_t size() const { return node_.size(); }
+  /// Room for `nodes` nodes in all: inserts up to that many do not move the stored ones
+  /// (a doubling vector copied every node record into fresh pages each time it grew).
+  void reserve(std::size_t nodes) { node_.reserve(nodes); }
   const double* lo() const { return lo_; }
   double s0() const { return s0_; }
 
