@@ -25,6 +25,7 @@
 #include "mesher/improve/improve_smooth.h"
 #include "mesher/improve/improve_split_boundary.h"
 #include "mesher/improve/improve_tets.h"
+#include "mesher/improve/sine_cache.h"
 #include "mesher/quality/mesh_check.h"
 #include "mesher/improve/mesh_improve.h"
 #include "mesher/placement/node_placement.h"
@@ -219,8 +220,8 @@ TEST(ImproveFlips, FaceRemovalIsTheTwoThreeFlip) {
 // The flip stage takes dead slots for its new tets a pool at a time (take_slots). The slot
 // arrays were sized exactly, so the first pool doubled and copied all of them: on the paper
 // gear box (24.5M slots, 102k added in all) ~1 GB copied into fresh pages, both copies
-// resident at once. They now keep room for a 32nd more slots: pools within it leave the arrays
-// where they are, and the records stay.
+// resident at once, and the sine cache's values then did the same. Both now keep room for a
+// 32nd more slots: pools within it leave the arrays where they are, and the records stay.
 TEST(ImproveTets, RegressionTakingSlotsForTheFlipPoolsDoesNotMoveTheSlotArrays) {
   // 4,096 tets (a row of 1,024 cubes of 4 tets each sharing no vertex: the test needs slots,
   // not geometry), room for 128 more slots.
@@ -240,11 +241,17 @@ TEST(ImproveTets, RegressionTakingSlotsForTheFlipPoolsDoesNotMoveTheSlotArrays) 
   NodeSet n = interior_nodes(pts);
   for (std::size_t k = 0; k < tets.size(); k += 4) ASSERT_GT(signed_volume(n, &tets[k]), 0);
   ImproveTets m(n, tets, region);
+  SineCache cache(m, 1);  // its values keep the same room
+  const double* values = cache.q().data();
   const std::uint32_t* before = m.v(4095);
   const std::array<std::uint32_t, 4> last = {before[0], before[1], before[2], before[3]};
   std::vector<std::uint32_t> pool = m.take_slots(100);
   std::vector<std::uint32_t> more = m.take_slots(28);  // 4,224 slots: the room is full
   EXPECT_EQ(m.capacity(), 4224u);
+  cache.grow();
+  EXPECT_EQ(cache.q().size(), 4224u);
+  EXPECT_EQ(cache.q().data(), values);
+  EXPECT_EQ(cache.q()[4223], std::numeric_limits<double>::infinity());
   EXPECT_EQ(m.v(4095), before);
   EXPECT_EQ((std::array<std::uint32_t, 4>{m.v(4095)[0], m.v(4095)[1], m.v(4095)[2], m.v(4095)[3]}), last);
   for (std::uint32_t t : pool) EXPECT_FALSE(m.alive(t));

@@ -64,7 +64,7 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
   // below its threshold; the paper gear box's 24.5M grew by 102k): growing an array past its
   // capacity doubled it and copied it, ~1 GB into fresh pages for all five on the gear box,
   // both copies resident at once. Pages of the room stay unresident until used.
-  const std::size_t room = nt + nt / 32;
+  const std::size_t room = slot_room(nt);
   tv_.reserve(4 * room);
   ta_.reserve(4 * room);
   region_.reserve(room);

@@ -43,6 +43,9 @@ class ImproveTets {
   double* p_mut(std::uint32_t v) { return nodes_->points.xyz.data() + 3 * std::size_t(v); }
 
   std::size_t capacity() const { return tv_.size() / 4; }  ///< slots, live or dead
+  /// Slots the slot arrays hold without moving, for a mesh of `tets` tets: room for the flip
+  /// stage's pools (take_slots), which per-slot arrays kept beside these (SineCache) keep too.
+  static std::size_t slot_room(std::size_t tets) { return tets + tets / 32; }
   std::size_t live() const { return tv_.size() / 4 - free_.size(); }
   bool alive(std::uint32_t t) const { return tv_[4 * std::size_t(t)] != kImproveNone; }
   const std::uint32_t* v(std::uint32_t t) const { return &tv_[4 * std::size_t(t)]; }

@@ -24,6 +24,9 @@ class SineCache {
   SineCache(const ImproveTets& m, unsigned threads) : m_(m), threads_(threads) { refresh_all(); }
   const std::vector<double>& q() const { return q_; }
   void refresh_all() {
+    // The room ImproveTets keeps for the flip pools' slots: grow() then stays in place (it
+    // doubled and copied the paper gear box's 196 MB of values after the first pool).
+    q_.reserve(ImproveTets::slot_room(m_.capacity()));
     q_.assign(m_.capacity(), std::numeric_limits<double>::infinity());
     parallel_for(q_.size(), [&](std::size_t b, std::size_t e, unsigned) {
       for (std::size_t t = b; t < e; ++t)
