@@ -24,6 +24,13 @@ struct NodeSet {
   std::vector<float> size;           ///< target size h at the node
 
   std::size_t size_count() const { return kind.size(); }
+  /// Room for n nodes in every array: push_back up to n nodes moves none.
+  void reserve(std::size_t n) {
+    points.xyz.reserve(3 * n);
+    kind.reserve(n);
+    facet.reserve(n);
+    size.reserve(n);
+  }
   void push_back(const double* p, NodeKind k, std::uint32_t f, float h) {
     points.push_back(p[0], p[1], p[2]);
     kind.push_back(k);

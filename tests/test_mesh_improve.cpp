@@ -261,6 +261,35 @@ TEST(ImproveTets, RegressionTakingSlotsForTheFlipPoolsDoesNotMoveTheSlotArrays) 
   expect_consistent(m);
 }
 
+// The quality pass's splits add nodes (add_interior_node). The node set's arrays were full, so
+// the first one doubled and copied all of them (the paper gear box: 4.2M nodes, ~150 MB).
+// ImproveTets now keeps room for a 64th more nodes (and 64): adding within it moves nothing.
+TEST(ImproveTets, RegressionAddingNodesDoesNotMoveTheNodeArrays) {
+  std::vector<std::array<double, 3>> pts;
+  std::vector<std::uint32_t> tets, region;
+  for (std::uint32_t c = 0; c < 1024; ++c) {  // 1,024 separate tets, 4,096 nodes
+    const double x = 10.0 * c;
+    const std::uint32_t b = std::uint32_t(pts.size());
+    pts.insert(pts.end(), {{x, 0, 0}, {x + 1, 0, 0}, {x, 1, 0}, {x, 0, 1}});
+    tets.insert(tets.end(), {b, b + 1, b + 2, b + 3});
+    region.push_back(0);
+  }
+  NodeSet n = interior_nodes(pts);
+  n.points.xyz.shrink_to_fit();  // full, as a node set built to size is
+  ImproveTets m(n, tets, region);
+  const double* xyz = n.points.xyz.data();
+  const float* size = n.size.data();
+  for (int k = 0; k < 128; ++k) {  // 4,096 + 128 nodes: the room (4,096 / 64 + 64) is full
+    const double p[3] = {5.0 + k, 5, 5};
+    EXPECT_EQ(m.add_interior_node(p, 1.0f), 4096u + std::uint32_t(k));
+  }
+  EXPECT_EQ(n.size_count(), 4224u);
+  EXPECT_EQ(n.points.xyz.data(), xyz);
+  EXPECT_EQ(n.size.data(), size);
+  EXPECT_EQ(n.points.p(4223)[0], 132.0);
+  expect_consistent(m);
+}
+
 // A tet with three boundary faces around its apex p (its only tet): removing it would leave p
 // without a tet, so remove() refuses unless p may be orphaned; then the other tet stays, with
 // the shared face now on the boundary, and write_back drops p (a flat cap of this shape was

@@ -447,6 +447,9 @@ std::string xyz(const double* p) {
 NodeSet rebuild_nodes(const NodeSet& nodes, const std::vector<std::uint8_t>& drop,
                       const NodeSet& steiner) {
   NodeSet out;
+  // Sized first (at most every node is kept): grown by doubling, the arrays were copied ~22
+  // times (the paper gear box's 4.2M nodes: ~300 MB of copies into fresh pages on one core).
+  out.reserve(nodes.size_count() + steiner.size_count());
   for (std::size_t i = 0; i < nodes.size_count(); ++i)
     if (!drop[i]) out.push_back(nodes.points.p(std::uint32_t(i)), nodes.kind[i], nodes.facet[i], nodes.size[i]);
   for (std::size_t i = 0; i < steiner.size_count(); ++i)
