@@ -15,11 +15,14 @@
 #include <cmath>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <span>
 #include <sstream>
 #include <unordered_map>
 
 #include "core/error.h"
+#include "core/page_warmer.h"
+#include "core/uninit_allocator.h"
 #include "core/timer.h"
 #include "mesher/bucket_scatter.h"
 #include "mesher/delaunay/canonical_order.h"
@@ -702,10 +705,9 @@ void compact_result(const Triangulation& tri, const std::vector<std::uint8_t>& i
                     bool interfaces, VolumeMesh& out) {
   VolumeMeshStats& st = out.stats;
   const std::size_t nt = tri.num_tets();
-  std::vector<std::uint32_t> new_tet(nt, kNone);
+  std::vector<std::uint32_t, UninitAllocator<std::uint32_t>> new_tet(nt);  // written whole below
   std::uint32_t count = 0;
-  for (std::size_t t = 0; t < nt; ++t)
-    if (inside[t]) new_tet[t] = count++;
+  for (std::size_t t = 0; t < nt; ++t) new_tet[t] = inside[t] ? count++ : kNone;
   if (count == 0)
     throw GeometryError("mesh_volume: no tetrahedron of the " + std::to_string(nodes.size_count()) +
                         " nodes lies inside the solid");
@@ -713,6 +715,15 @@ void compact_result(const Triangulation& tri, const std::vector<std::uint8_t>& i
   std::uint32_t nn = 0;
   out.tets.reserve(4 * std::size_t(count));
   out.tet_region.reserve(count);
+  out.tet_adj.reserve(4 * std::size_t(count));
+  // The loop below numbers the nodes in order of first use: one core. Meanwhile the other
+  // makes the output's pages resident, ahead of the loop's writes, then the adjacency's
+  // (written after it): the paper gear box's 23.6M tets write ~850 MB of fresh pages here.
+  std::optional<PageWarmer> warmer;
+  warmer.emplace(std::vector<PageWarmer::Range>{
+      {out.tets.data(), out.tets.data() + 4 * std::size_t(count)},
+      {out.tet_region.data(), out.tet_region.data() + count},
+      {out.tet_adj.data(), out.tet_adj.data() + 4 * std::size_t(count)}});
   for (std::size_t t = 0; t < nt; ++t) {
     if (!inside[t]) continue;
     for (int i = 0; i < 4; ++i) {
@@ -722,6 +733,7 @@ void compact_result(const Triangulation& tri, const std::vector<std::uint8_t>& i
     }
     out.tet_region.push_back(region_of.empty() ? 0 : region_of[t]);
   }
+  warmer.reset();  // (stops it)
   out.tet_adj.resize(4 * std::size_t(count));
   parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t t = b; t < e; ++t) {
@@ -749,15 +761,19 @@ void compact_result(const Triangulation& tri, const std::vector<std::uint8_t>& i
   for (std::size_t k = 0; k < bf.verts.size(); ++k) out.boundary[k] = new_id[bf.verts[k]];
   std::vector<char> on_boundary(nn, 0);
   for (std::uint32_t v : out.boundary) on_boundary[v] = 1;
-  if (interfaces)  // nodes on the faces between bodies are on an interface
-    for (std::size_t t = 0; t < nt; ++t) {
-      if (!inside[t]) continue;
-      for (int i = 0; i < 4; ++i) {
-        const std::uint32_t u = tri.adj(t, i) >> 2;
-        if (!inside[u] || region_of[u] == region_of[t]) continue;
-        for (int j = 0; j < 3; ++j) on_boundary[new_id[tri.v(t, kTetFace[i][j])]] = 1;
+  if (interfaces)  // nodes on the faces between bodies are on an interface (on both cores:
+    // one took 0.25 s of the paper gear box's 1.0 s here; the marks are idempotent stores)
+    parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
+      for (std::size_t t = b; t < e; ++t) {
+        if (!inside[t]) continue;
+        for (int i = 0; i < 4; ++i) {
+          const std::uint32_t u = tri.adj(t, i) >> 2;
+          if (!inside[u] || region_of[u] == region_of[t]) continue;
+          for (int j = 0; j < 3; ++j)
+            std::atomic_ref<char>(on_boundary[new_id[tri.v(t, kTetFace[i][j])]]).store(1, std::memory_order_relaxed);
+        }
       }
-    }
+    }, 1 << 16);
   for (std::uint32_t v = 0; v < nn; ++v)
     if (!on_boundary[v] && out.nodes.kind[v] != NodeKind::interior) {
       out.nodes.kind[v] = NodeKind::interior;
