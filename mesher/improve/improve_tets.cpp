@@ -53,7 +53,7 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
   // Slots in the order of each tet's smallest vertex id (a counting sort; stable): the tets
   // around a vertex then lie close together in memory when nearby nodes have nearby ids,
   // which the passes' star walks (and the input order, in insertion order) need.
-  std::vector<std::uint32_t> order(nt);  // slot -> input tet
+  std::vector<std::uint32_t, UninitAllocator<std::uint32_t>> order(nt);  // slot -> input tet (all written)
   bucket_scatter(
       nt, np,
       [&](std::size_t t) {
