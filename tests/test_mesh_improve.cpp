@@ -223,8 +223,8 @@ TEST(ImproveFlips, FaceRemovalIsTheTwoThreeFlip) {
 // resident at once, and the sine cache's values then did the same. Both now keep room for a
 // 32nd more slots: pools within it leave the arrays where they are, and the records stay.
 TEST(ImproveTets, RegressionTakingSlotsForTheFlipPoolsDoesNotMoveTheSlotArrays) {
-  // 4,096 tets (a row of 1,024 cubes of 4 tets each sharing no vertex: the test needs slots,
-  // not geometry), room for 128 more slots.
+  // 4,096 separate tets, each with its own four nodes (the test needs slots, not a mesh): room
+  // for 4,096 / 32 = 128 more slots.
   std::vector<std::array<double, 3>> pts;
   std::vector<std::uint32_t> tets;
   std::vector<std::uint32_t> region;

@@ -85,14 +85,14 @@ ImproveTets::ImproveTets(NodeSet& nodes, const std::vector<std::uint32_t>& tets,
       if (!given) std::fill_n(&ta_[4 * s], 4, kImproveNone);
     }
   }, 1 << 16);
-  // Each node's tet: the last slot holding it (the largest), as a loop over the slots in
-  // order would leave it.
   // Room for the nodes the passes add (add_interior_node, add_boundary_node: 26 splits on the
   // paper gear box): the first one doubled and copied the node set's arrays, ~150 MB there.
   const std::size_t node_room = np + np / 64 + 64;
   nodes.reserve(node_room);
   vtet_.reserve(node_room);
   locked_.reserve(node_room);
+  // Each node's tet: the last slot holding it (the largest), as a loop over the slots in
+  // order would leave it.
   vtet_.assign(np, kImproveNone);
   parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t t = b; t < e; ++t)

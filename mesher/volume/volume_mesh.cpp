@@ -22,8 +22,8 @@
 
 #include "core/error.h"
 #include "core/page_warmer.h"
-#include "core/uninit_allocator.h"
 #include "core/timer.h"
+#include "core/uninit_allocator.h"
 #include "mesher/bucket_scatter.h"
 #include "mesher/delaunay/canonical_order.h"
 #include "mesher/volume/boundary_faces.h"
