@@ -15,6 +15,7 @@
 #include "core/timer.h"
 #include "core/triangle_distance.h"
 #include "mesher/bucket_scatter.h"
+#include "core/parallel_collect.h"
 #include "core/parallel_for.h"
 #include "core/uninit_allocator.h"
 #include "mesher/quality/centroid_sides.h"
@@ -344,10 +345,12 @@ struct FacetBound {
 void check_boundary_vertices(const VolumeMesh& mesh, const Domain& domain, const std::vector<Tri>& bnd,
                              const FacetBound& bound, MeshCheck& c) {
   const PointSet& pts = mesh.nodes.points;
-  std::vector<std::uint32_t> bverts;
-  for (auto& f : bnd) bverts.insert(bverts.end(), f.begin(), f.end());
-  std::sort(bverts.begin(), bverts.end());
-  bverts.erase(std::unique(bverts.begin(), bverts.end()), bverts.end());
+  // The faces' distinct vertices in id order: marked, then collected on all threads (ids are
+  // valid: ids_valid). Sorting the faces' 3.3M corners took one core 0.15 s on the paper gear box.
+  std::vector<std::uint8_t> on(pts.size(), 0);
+  for (const Tri& f : bnd)
+    for (const std::uint32_t v : f) on[v] = 1;
+  const std::vector<std::uint32_t> bverts = parallel_collect(pts.size(), [&](std::size_t v) { return on[v] != 0; });
   std::vector<double> vdist(bverts.size());
   parallel_for(bverts.size(), [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t k = b; k < e; ++k) {
