@@ -1025,6 +1025,67 @@ TEST(CheckVolumeMesh, NonManifoldVertexIsCounted) {
   EXPECT_TRUE(named) << failures(c);
 }
 
+// Eight cubes along the diagonal (i, i, 0) share seven edges, each in 4 boundary faces; eight
+// along (i, i, i) share seven corners, each with 2 fans. The checker counts all seven and names
+// the first five in the order of one sort of them all: edges by their ends' node ids, vertices
+// by id. (Both walks were sorts of every (vertex, face) or edge on one core; they now group
+// by vertex on all threads, 2026-12.)
+TEST(CheckVolumeMesh, OpenEdgesAndFansAreAllCountedAndNamedInIdOrder) {
+  auto node_id = [](const VolumeMesh& vm, int x, int y, int z) {
+    for (std::uint32_t v = 0; v < vm.nodes.points.size(); ++v) {
+      const double* p = vm.nodes.points.p(v);
+      if (p[0] == x && p[1] == y && p[2] == z) return v;
+    }
+    ADD_FAILURE() << "no node at " << x << " " << y << " " << z;
+    return std::uint32_t(0);
+  };
+  auto at = [](int x, int y, int z) {
+    return "(" + std::to_string(x) + ", " + std::to_string(y) + ", " + std::to_string(z) + ")";
+  };
+  {
+    std::vector<std::array<int, 3>> offsets;
+    for (int i = 0; i < 8; ++i) offsets.push_back({i, i, 0});
+    const VolumeMesh vm = kuhn_cubes(offsets);
+    const PreparedSurface s = voxel_surface(Voxels::block(8, 8, 1, 1.0));
+    const SurfaceQuery q(s.mesh);
+    const SizingField h = uniform_size(s, 1.0);
+    const MeshCheck c = check_volume_mesh(vm, {s, q, h});
+    EXPECT_EQ(c.open_edges, 7u) << failures(c);
+    EXPECT_EQ(c.nonmanifold_vertices, 0u) << failures(c);
+    std::vector<std::pair<std::pair<std::uint32_t, std::uint32_t>, std::string>> edges;
+    for (int i = 1; i < 8; ++i) {
+      std::uint32_t a = node_id(vm, i, i, 0), b = node_id(vm, i, i, 1);
+      std::string text = " " + at(i, i, 0) + "-" + at(i, i, 1);
+      if (a > b) std::swap(a, b), text = " " + at(i, i, 1) + "-" + at(i, i, 0);
+      edges.push_back({{a, b}, text + " in 4 face(s)"});
+    }
+    std::sort(edges.begin(), edges.end());
+    std::string want = "7 boundary edge(s) not in exactly two boundary faces, e.g.";
+    for (std::size_t k = 0; k < 5; ++k) want += edges[k].second;
+    EXPECT_NE(failures(c).find(want + "\n"), std::string::npos) << want << "\n" << failures(c);
+  }
+  {
+    std::vector<std::array<int, 3>> offsets;
+    for (int i = 0; i < 8; ++i) offsets.push_back({i, i, i});
+    const VolumeMesh vm = kuhn_cubes(offsets);
+    const PreparedSurface s = voxel_surface(Voxels::block(8, 8, 8, 1.0));
+    const SurfaceQuery q(s.mesh);
+    const SizingField h = uniform_size(s, 1.0);
+    const MeshCheck c = check_volume_mesh(vm, {s, q, h});
+    EXPECT_EQ(c.open_edges, 0u) << failures(c);
+    EXPECT_EQ(c.nonmanifold_vertices, 7u) << failures(c);
+    std::vector<std::pair<std::uint32_t, std::string>> corners;
+    for (int i = 1; i < 8; ++i) {
+      const std::uint32_t v = node_id(vm, i, i, i);
+      corners.push_back({v, " " + std::to_string(v) + " at " + at(i, i, i) + " (2 fans)"});
+    }
+    std::sort(corners.begin(), corners.end());
+    std::string want = "7 non-manifold boundary vertex(es), e.g.";
+    for (std::size_t k = 0; k < 5; ++k) want += corners[k].second;
+    EXPECT_NE(failures(c).find(want + "\n"), std::string::npos) << want << "\n" << failures(c);
+  }
+}
+
 // A tet given twice (the face records of the check were made 16 bytes in 2026-11; this pins
 // what they must still find): the first Kuhn tet's two faces inside the cube are then in
 // three tets, and its two faces on the cube's boundary in two tets that see them the same way.
