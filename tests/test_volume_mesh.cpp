@@ -1042,14 +1042,19 @@ TEST(CheckVolumeMesh, OpenEdgesAndFansAreAllCountedAndNamedInIdOrder) {
   auto at = [](int x, int y, int z) {
     return "(" + std::to_string(x) + ", " + std::to_string(y) + ", " + std::to_string(z) + ")";
   };
-  {
+  // Eight cubes at (i, i, dz * i), checked against the block of voxels holding them.
+  auto checked_chain = [](int dz, VolumeMesh& vm) {
     std::vector<std::array<int, 3>> offsets;
-    for (int i = 0; i < 8; ++i) offsets.push_back({i, i, 0});
-    const VolumeMesh vm = kuhn_cubes(offsets);
-    const PreparedSurface s = voxel_surface(Voxels::block(8, 8, 1, 1.0));
+    for (int i = 0; i < 8; ++i) offsets.push_back({i, i, dz * i});
+    vm = kuhn_cubes(offsets);
+    const PreparedSurface s = voxel_surface(Voxels::block(8, 8, dz ? 8 : 1, 1.0));
     const SurfaceQuery q(s.mesh);
     const SizingField h = uniform_size(s, 1.0);
-    const MeshCheck c = check_volume_mesh(vm, {s, q, h});
+    return check_volume_mesh(vm, {s, q, h});
+  };
+  {
+    VolumeMesh vm;
+    const MeshCheck c = checked_chain(0, vm);
     EXPECT_EQ(c.open_edges, 7u) << failures(c);
     EXPECT_EQ(c.nonmanifold_vertices, 0u) << failures(c);
     std::vector<std::pair<std::pair<std::uint32_t, std::uint32_t>, std::string>> edges;
@@ -1065,13 +1070,8 @@ TEST(CheckVolumeMesh, OpenEdgesAndFansAreAllCountedAndNamedInIdOrder) {
     EXPECT_NE(failures(c).find(want + "\n"), std::string::npos) << want << "\n" << failures(c);
   }
   {
-    std::vector<std::array<int, 3>> offsets;
-    for (int i = 0; i < 8; ++i) offsets.push_back({i, i, i});
-    const VolumeMesh vm = kuhn_cubes(offsets);
-    const PreparedSurface s = voxel_surface(Voxels::block(8, 8, 8, 1.0));
-    const SurfaceQuery q(s.mesh);
-    const SizingField h = uniform_size(s, 1.0);
-    const MeshCheck c = check_volume_mesh(vm, {s, q, h});
+    VolumeMesh vm;
+    const MeshCheck c = checked_chain(1, vm);
     EXPECT_EQ(c.open_edges, 0u) << failures(c);
     EXPECT_EQ(c.nonmanifold_vertices, 7u) << failures(c);
     std::vector<std::pair<std::uint32_t, std::string>> corners;
