@@ -416,8 +416,9 @@ struct ByVertex {
   ByVertex(std::size_t np, std::size_t n, VertexOf&& vertex_of, ValueOf&& value_of) : value(n) {
     start = bucket_scatter(n, np, vertex_of, [&](std::size_t i, std::size_t at) { value[at] = value_of(i); });
   }
-  /// Calls g(c, v) for every vertex v of range c, the kChunks ranges (of about equal numbers
-  /// of items) taken by free cores, each range's vertices in order.
+  /// Calls g(c, v, w) for every vertex v of range c, the kChunks ranges (of about equal
+  /// numbers of items) taken by free cores, each range's vertices in order; w < available_cpus()
+  /// names the worker (for its scratch space).
   template <class G>
   void each_vertex(G&& g) const {
     auto begin = [&](std::size_t c) {
@@ -425,9 +426,9 @@ struct ByVertex {
       const std::size_t target = start.back() * c / Faces::kChunks;
       return std::size_t(std::lower_bound(start.begin(), start.end() - 1, target) - start.begin());
     };
-    parallel_blocks(Faces::kChunks, 1, [&](std::size_t cb, std::size_t ce, unsigned) {
+    parallel_blocks(Faces::kChunks, 1, [&](std::size_t cb, std::size_t ce, unsigned w) {
       for (std::size_t c = cb; c < ce; ++c)
-        for (std::size_t v = begin(c), ve = begin(c + 1); v < ve; ++v) g(c, std::uint32_t(v));
+        for (std::size_t v = begin(c), ve = begin(c + 1); v < ve; ++v) g(c, std::uint32_t(v), w);
     });
   }
 };
@@ -439,10 +440,12 @@ void check_open_edges(const PointSet& pts, const std::vector<Tri>& bnd, MeshChec
   const ByVertex edges(pts.size(), 3 * bnd.size(), [&](std::size_t i) { return ends(i).first; },
                        [&](std::size_t i) { return ends(i).second; });
   Examples ex;
-  edges.each_vertex([&](std::size_t ch, std::uint32_t a) {
+  std::vector<std::vector<std::uint32_t>> scratch(available_cpus());
+  edges.each_vertex([&](std::size_t ch, std::uint32_t a, unsigned w) {
     const std::size_t i0 = edges.start[a], i1 = edges.start[a + 1];
     if (i0 == i1) return;
-    std::vector<std::uint32_t> b(edges.value.begin() + std::ptrdiff_t(i0), edges.value.begin() + std::ptrdiff_t(i1));
+    std::vector<std::uint32_t>& b = scratch[w];
+    b.assign(edges.value.begin() + std::ptrdiff_t(i0), edges.value.begin() + std::ptrdiff_t(i1));
     std::sort(b.begin(), b.end());
     for (std::size_t i = 0, j = 0; i < b.size(); i = j) {
       while (j < b.size() && b[j] == b[i]) ++j;
@@ -465,10 +468,12 @@ void check_vertex_fans(const PointSet& pts, const std::vector<Tri>& bnd, MeshChe
   const ByVertex faces(pts.size(), 3 * bnd.size(), [&](std::size_t i) { return bnd[i / 3][i % 3]; },
                        [&](std::size_t i) { return std::uint32_t(i / 3); });
   Examples ex;
-  faces.each_vertex([&](std::size_t ch, std::uint32_t v) {
+  std::vector<std::vector<int>> labels(available_cpus());
+  faces.each_vertex([&](std::size_t ch, std::uint32_t v, unsigned w) {
     const std::size_t i = faces.start[v], m = faces.start[v + 1] - i;
     if (m == 0) return;
-    std::vector<int> label(m, -1);
+    std::vector<int>& label = labels[w];
+    label.assign(m, -1);
     int fans = 0;
     for (std::size_t s = 0; s < m; ++s) {
       if (label[s] >= 0) continue;
