@@ -34,6 +34,21 @@ std::string xyz(const double* p) {
   return s.str();
 }
 
+/// Walks over items grouped by vertex id (vertex v's at [start[v], start[v + 1])) go in
+/// kWalkChunks ranges of ids, at once: each range's results apart, joined in range order, are
+/// those of one walk (the same on any thread count).
+constexpr std::size_t kWalkChunks = 64;
+
+/// The first id of range c (c <= kWalkChunks): the ranges hold about equal numbers of items.
+/// (Equal numbers of ids would not: a face goes to its smallest id, so low ids hold most
+/// faces; split by ids, the gear box's group sorts ran 86 % on one of two threads.)
+std::size_t chunk_begin(const std::vector<std::size_t>& start, std::size_t c) {
+  if (start.empty()) return 0;
+  if (c >= kWalkChunks) return start.size() - 1;
+  const std::size_t target = start.back() * c / kWalkChunks;
+  return std::size_t(std::lower_bound(start.begin(), start.end() - 1, target) - start.begin());
+}
+
 /// The faces of all tets, grouped by their smallest vertex id (group v: start[v]..start[v+1]),
 /// each group sorted by (the other two ids, tet): a face shared by two tets is two adjacent
 /// records. 16 bytes a record (until 2026-11 a 28-byte record held all three sorted ids and
@@ -57,18 +72,9 @@ struct Faces {
     const int* f = kF[rec[i].k % 4];
     return {v[f[0]], v[f[1]], v[f[2]]};
   }
-  /// The groups are walked in kChunks ranges of smallest ids, at once: each range's results
-  /// apart, joined in range order, are those of one walk (the same on any thread count).
-  static constexpr std::size_t kChunks = 64;
-  /// The first smallest id of range c (c <= kChunks): the ranges hold about equal numbers of
-  /// records. (Equal numbers of ids would not: a face goes to its smallest id, so low ids hold
-  /// most faces; split by ids, the gear box's group sorts ran 86 % on one of two threads.)
-  std::size_t chunk_begin(std::size_t c) const {
-    if (start.empty()) return 0;
-    if (c >= kChunks) return start.size() - 1;
-    const std::size_t target = start.back() * c / kChunks;
-    return std::size_t(std::lower_bound(start.begin(), start.end() - 1, target) - start.begin());
-  }
+  /// The groups are walked in kChunks ranges of smallest ids (chunk_begin).
+  static constexpr std::size_t kChunks = kWalkChunks;
+  std::size_t chunk_begin(std::size_t c) const { return kdmesh::chunk_begin(start, c); }
   /// Calls g(c, v, i, j) for each run [i, j) of records of one vertex set whose smallest id is
   /// v, v in range c; the ranges taken by free cores, each range's runs in order.
   template <class G>
@@ -416,19 +422,15 @@ struct ByVertex {
   ByVertex(std::size_t np, std::size_t n, VertexOf&& vertex_of, ValueOf&& value_of) : value(n) {
     start = bucket_scatter(n, np, vertex_of, [&](std::size_t i, std::size_t at) { value[at] = value_of(i); });
   }
-  /// Calls g(c, v, w) for every vertex v of range c, the kChunks ranges (of about equal
+  /// Calls g(c, v, w) for every vertex v of range c, the kWalkChunks ranges (of about equal
   /// numbers of items) taken by free cores, each range's vertices in order; w < available_cpus()
   /// names the worker (for its scratch space).
   template <class G>
   void each_vertex(G&& g) const {
-    auto begin = [&](std::size_t c) {
-      if (c >= Faces::kChunks) return start.size() - 1;
-      const std::size_t target = start.back() * c / Faces::kChunks;
-      return std::size_t(std::lower_bound(start.begin(), start.end() - 1, target) - start.begin());
-    };
-    parallel_blocks(Faces::kChunks, 1, [&](std::size_t cb, std::size_t ce, unsigned w) {
+    parallel_blocks(kWalkChunks, 1, [&](std::size_t cb, std::size_t ce, unsigned w) {
       for (std::size_t c = cb; c < ce; ++c)
-        for (std::size_t v = begin(c), ve = begin(c + 1); v < ve; ++v) g(c, std::uint32_t(v), w);
+        for (std::size_t v = chunk_begin(start, c), ve = chunk_begin(start, c + 1); v < ve; ++v)
+          g(c, std::uint32_t(v), w);
     });
   }
 };
