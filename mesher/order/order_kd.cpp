@@ -32,8 +32,8 @@
 // Nodes alternate between the two buffers. Subtrees of at most kTinyNode points are built
 // in place with insertion sorts. Below the root the two halves are independent; large
 // inputs build them on two threads (the result is identical to a serial run).
-// Measured on the 2-core development machine, 1M points: ~0.14 s serial, ~0.09 s with
-// the second thread.
+// Measured on the 2-core development machine, 1M cube points (bench_orders, kd-bfs-hilbert
+// with its Hilbert keys and level sorts): ~0.138 s on one thread, ~0.082 s on two.
 #include <algorithm>
 #include <bit>
 #include <cstddef>
@@ -43,9 +43,12 @@
 #include <memory>
 #include <system_error>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "core/error.h"
+#include "core/parallel_for.h"
+#include "core/uninit_allocator.h"
 #include "core/ordering.h"
 #include "core/point_set.h"
 #include "mesher/order/order_kd.h"
@@ -119,6 +122,16 @@ Box bounding_box(const KdPoint* a, std::size_t m) {
   b.hi[1] = hi0[1];
   b.hi[2] = zhi0 > zhi1 ? zhi0 : zhi1;
   return b;
+}
+
+/// The bounding box of two boxes' points (the comparisons of bounding_box()).
+Box enclosing(const Box& a, const Box& b) {
+  Box c;
+  for (int i = 0; i < 3; ++i) {
+    c.lo[i] = b.lo[i] < a.lo[i] ? b.lo[i] : a.lo[i];
+    c.hi[i] = b.hi[i] > a.hi[i] ? b.hi[i] : a.hi[i];
+  }
+  return c;
 }
 
 /// Axis of largest extent; ties go to the lowest axis (strict comparisons).
@@ -383,52 +396,66 @@ Ordering make_kd_order(const PointSet& points, bool alternate, unsigned threads)
   // 1. Records (x, y, z, id) in the working buffer; a second buffer for the scatters.
   //    Default-initialised arrays: no zeroing pass. First touching 64 MB for 1M points
   //    costs as much as a few tree levels (page faults), so large inputs split the copy
-  //    and the first touch of the scratch buffer between two threads.
+  //    and the first touch of the scratch buffer between two threads. Each part takes the
+  //    bounding box of its records a block at a time, while the block is in the cache: the
+  //    root's box without another pass over all of them.
+  const unsigned parts = two_threads ? 2 : 1;
+  const std::size_t bound[3] = {0, parts == 2 ? n / 2 : n, n};
   std::unique_ptr<KdPoint[]> work(new KdPoint[n]);
   std::unique_ptr<KdPoint[]> scratch(new KdPoint[n]);
   const double* xyz = points.xyz.data();
-  auto fill = [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      work[i] = KdPoint{{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]}, std::uint32_t(i)};
+  Box part_box[2] = {};
+  run_workers(parts, [&](unsigned w) {
+    constexpr std::size_t kBlock = 2048;  // 64 KB of records
+    for (std::size_t begin = bound[w]; begin < bound[w + 1]; begin += kBlock) {
+      const std::size_t end = std::min(bound[w + 1], begin + kBlock);
+      for (std::size_t i = begin; i < end; ++i)
+        work[i] = KdPoint{{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]}, std::uint32_t(i)};
+      if (alternate) continue;  // no boxes
+      const Box b = bounding_box(work.get() + begin, end - begin);
+      part_box[w] = begin == bound[w] ? b : enclosing(part_box[w], b);
     }
     constexpr std::size_t kPerPage = 4096 / sizeof(KdPoint);
-    for (std::size_t i = begin; i < end; i += kPerPage) scratch[i].id = 0;
-  };
-  bool filled = false;
-  if (two_threads) {
-    try {
-      std::thread helper(fill, n / 2, n);
-      fill(0, n / 2);
-      helper.join();
-      filled = true;
-    } catch (const std::system_error&) {
-    }
-  }
-  if (!filled) fill(0, n);
-  std::vector<std::uint32_t> ids(n), parents(n);
-  std::vector<std::uint8_t> depths(n);
+    for (std::size_t i = bound[w]; i < bound[w + 1]; i += kPerPage) scratch[i].id = 0;
+  });
+  const Box root_box = parts == 2 ? enclosing(part_box[0], part_box[1]) : part_box[0];
+  // Written at every position by the build (each position holds exactly one node): no
+  // zeroing pass, and the halves' threads first touch their own parts.
+  std::vector<std::uint32_t, UninitAllocator<std::uint32_t>> ids(n), parents(n);
+  std::vector<std::uint8_t, UninitAllocator<std::uint8_t>> depths(n);
   const KdBuilder builder(alternate, NodeArrays{ids.data(), parents.data(), depths.data()});
-  const Box root_box = alternate ? Box{} : bounding_box(work.get(), n);
   builder.build(work.get(), scratch.get(), 0, n, 0, kNoHint, root_box, two_threads);
-  work.reset();
-  scratch.reset();
 
   // 2. Breadth-first order. Subtrees occupy disjoint, left-to-right ordered position
   //    ranges, so the nodes of one depth appear left to right in increasing position: the
   //    breadth-first order is the positions sorted by (depth, position), a counting sort.
-  //    (Depths are below 32 since n < 2^32.)
-  std::size_t start[34] = {};
-  for (std::size_t p = 0; p < n; ++p) ++start[depths[p] + 1];
-  for (int d = 1; d < 34; ++d) start[d] += start[d - 1];
+  //    (Depths are below 32 since n < 2^32.) With two threads each half of the positions is
+  //    placed by its own thread: a depth's nodes in the first half come before those in the
+  //    second, so the first half's run of each depth starts at the depth's start and the
+  //    second's after it. The same result as one pass.
+  constexpr int kDepths = 34;
+  std::size_t next[2][kDepths] = {};  // per part: its count per depth, then its next rank
   out.order.resize(n);
   out.hint.resize(n);
   out.level.resize(n);
-  for (std::size_t p = 0; p < n; ++p) {
-    const std::size_t r = start[depths[p]]++;
-    out.order[r] = ids[p];
-    out.hint[r] = parents[p];
-    out.level[r] = depths[p];
-  }
+  run_workers(parts, [&](unsigned w) {
+    // The records are done with; releasing each buffer (unmapping 32 bytes a point) is a
+    // thread's work too.
+    if (w == 0) work.reset();
+    if (w + 1 == parts) scratch.reset();
+    for (std::size_t p = bound[w]; p < bound[w + 1]; ++p) ++next[w][depths[p]];
+  });
+  for (std::size_t d = 0, rank = 0; d < kDepths; ++d)
+    for (unsigned w = 0; w < parts; ++w) rank += std::exchange(next[w][d], rank);
+  run_workers(parts, [&](unsigned w) {
+    std::size_t* const at = next[w];
+    for (std::size_t p = bound[w]; p < bound[w + 1]; ++p) {
+      const std::size_t r = at[depths[p]]++;
+      out.order[r] = ids[p];
+      out.hint[r] = parents[p];
+      out.level[r] = depths[p];
+    }
+  });
   return out;
 }
 

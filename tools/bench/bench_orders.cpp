@@ -1,5 +1,6 @@
 // Benchmark: building each insertion order for 1M points of the cube and axes distributions.
-// Times are wall-clock (the kd orders use a second thread below the root).
+// Times are wall-clock, on one thread (/t1) and on two (/t2: the kd orders use a second thread
+// below the root).
 // Usage: bench_orders [--benchmark_filter=kd] [other Google Benchmark flags]
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <benchmark/benchmark.h>
@@ -25,11 +26,12 @@ const PointSet& points(Distribution d) {
   return d == Distribution::cube ? cube : axes;
 }
 
-void bench_order(benchmark::State& state, Distribution d, OrderKind kind) {
+void bench_order(benchmark::State& state, Distribution d, OrderKind kind, unsigned threads) {
   const PointSet& ps = points(d);
   OrderOptions options;
   options.kind = kind;
   options.seed = kSeed;
+  options.threads = threads;
   for (auto _ : state) {
     Ordering o = make_order(ps, options);
     benchmark::DoNotOptimize(o.order.data());
@@ -42,13 +44,16 @@ const int registered = [] {
   for (const Distribution d : {Distribution::cube, Distribution::axes}) {
     for (const std::string& name : order_kind_names()) {
       const OrderKind kind = parse_order_kind(name);
-      const std::string label = "order/" + name + "/" + std::string(distribution_name(d)) + "/1M";
-      benchmark::RegisterBenchmark(label.c_str(), [d, kind](benchmark::State& s) {
-        bench_order(s, d, kind);
-      })
-          ->Unit(benchmark::kMillisecond)
-          ->UseRealTime()
-          ->MinTime(0.5);
+      for (const unsigned threads : {1u, 2u}) {
+        const std::string label = "order/" + name + "/" + std::string(distribution_name(d)) +
+                                  "/1M/t" + std::to_string(threads);
+        benchmark::RegisterBenchmark(label.c_str(), [d, kind, threads](benchmark::State& s) {
+          bench_order(s, d, kind, threads);
+        })
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime()
+            ->MinTime(0.5);
+      }
     }
   }
   return 0;
