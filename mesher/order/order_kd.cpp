@@ -47,10 +47,10 @@
 #include <vector>
 
 #include "core/error.h"
-#include "core/parallel_for.h"
-#include "core/uninit_allocator.h"
 #include "core/ordering.h"
+#include "core/parallel_for.h"
 #include "core/point_set.h"
+#include "core/uninit_allocator.h"
 #include "mesher/order/order_kd.h"
 
 namespace kdmesh::detail {
