@@ -15,7 +15,6 @@
 #include <cmath>
 #include <memory>
 #include <numeric>
-#include <optional>
 #include <span>
 #include <sstream>
 #include <unordered_map>
@@ -719,11 +718,9 @@ void compact_result(const Triangulation& tri, const std::vector<std::uint8_t>& i
   // The loop below numbers the nodes in order of first use: one core. Meanwhile the other
   // makes the output's pages resident, ahead of the loop's writes, then the adjacency's
   // (written after it): the paper gear box's 23.6M tets write ~850 MB of fresh pages here.
-  std::optional<PageWarmer> warmer;
-  warmer.emplace(std::vector<PageWarmer::Range>{
-      {out.tets.data(), out.tets.data() + 4 * std::size_t(count)},
-      {out.tet_region.data(), out.tet_region.data() + count},
-      {out.tet_adj.data(), out.tet_adj.data() + 4 * std::size_t(count)}});
+  PageWarmer warmer({{out.tets.data(), out.tets.data() + 4 * std::size_t(count)},
+                     {out.tet_region.data(), out.tet_region.data() + count},
+                     {out.tet_adj.data(), out.tet_adj.data() + 4 * std::size_t(count)}});
   for (std::size_t t = 0; t < nt; ++t) {
     if (!inside[t]) continue;
     for (int i = 0; i < 4; ++i) {
@@ -733,7 +730,7 @@ void compact_result(const Triangulation& tri, const std::vector<std::uint8_t>& i
     }
     out.tet_region.push_back(region_of.empty() ? 0 : region_of[t]);
   }
-  warmer.reset();  // (stops it)
+  warmer.stop();
   out.tet_adj.resize(4 * std::size_t(count));
   parallel_for(nt, [&](std::size_t b, std::size_t e, unsigned) {
     for (std::size_t t = b; t < e; ++t) {
